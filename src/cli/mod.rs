@@ -1,0 +1,56 @@
+//! Sub-commands. Each parses its flags here and hands the library a scene and parameters.
+
+mod devices;
+mod render;
+
+use std::process::ExitCode;
+use std::sync::Arc;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use sensorlight::vk::{Device, DeviceOptions};
+
+#[derive(Parser)]
+#[command(name = "sensorlight", version, about = "Global illumination by Sensor-Based Lighting on Vulkan")]
+#[command(after_help = "Set SENSORLIGHT_VALIDATION=1 to run under the Khronos validation layer; \
+    any message it reports then makes the exit code 3.")]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List the Vulkan devices, their drivers and the limits that matter here.
+    Devices,
+    /// Render a scene to an EXR.
+    Render(render::RenderArgs),
+}
+
+pub fn run(cli: Cli) -> Result<ExitCode> {
+    match cli.command {
+        Command::Devices => devices::run(),
+        Command::Render(args) => render::run(args),
+    }
+}
+
+/// Exit code when the validation layer reported anything.
+const EXIT_VALIDATION: u8 = 3;
+
+/// Opens the device (`--device N` or the best one), says which, runs `work`, closes the device, and turns
+/// validation messages into a non-zero exit.
+fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> Result<()>) -> Result<ExitCode> {
+    let options = DeviceOptions::from_env(device_index);
+    let device = Device::new(&options)?;
+    eprintln!("device: {}", device.adapter);
+    let log = device.validation_log().clone();
+    let result = work(&device);
+    drop(device);
+    result?;
+    let messages = log.messages();
+    if !messages.is_empty() {
+        eprintln!("error: the validation layer reported {} message(s)", messages.len());
+        return Ok(ExitCode::from(EXIT_VALIDATION));
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,36 @@
+//! The scene as the GPU passes read it: a vertex buffer (triangle soup), per-triangle normals and the
+//! per-surface materials. Uploaded once per render and shared by the G-buffer and sensor passes.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use ash::vk;
+use glam::Vec4;
+
+use crate::gpu_types;
+use crate::scene::Scene;
+use crate::vk::{Buffer, Device};
+
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub vertex_count: u32,
+    /// One `vec4` per triangle: the front normal.
+    pub normals: Buffer,
+    /// `GpuSurface` per surface id (entry 0 unused).
+    pub surfaces: Buffer,
+}
+
+impl GpuScene {
+    pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
+        let mesh = &scene.mesh;
+        let vertices = gpu_types::vertices(mesh);
+        let normals: Vec<Vec4> = mesh.triangles.iter().map(|t| t.normal.extend(0.0)).collect();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            vertex_count: vertices.len() as u32,
+            vertices: Buffer::upload(device, "vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER | storage)?,
+            normals: Buffer::upload(device, "triangle normals", &normals, storage)?,
+            surfaces: Buffer::upload(device, "surfaces", &gpu_types::surfaces(mesh), storage)?,
+        })
+    }
+}

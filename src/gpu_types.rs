@@ -1,0 +1,85 @@
+//! Structs shared with the shaders, defined once here and mirrored in `glsl/types.glsl` (std430 / push
+//! constant layout). `tests/layout.rs` reads the member offsets and array strides out of the compiled SPIR-V
+//! and compares them with these definitions, so the two cannot drift apart silently. No `vec3` members:
+//! std430 aligns them to 16 bytes where Rust packs 12.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+
+use crate::scene::Mesh;
+
+/// One vertex of the triangle soup (binding 0; attributes at the offsets below). Three per triangle.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    /// The triangle's surface id (flat across its three vertices).
+    pub surface: u32,
+}
+
+/// Material of a surface, indexed by surface id (entry 0 unused: "no surface").
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSurface {
+    /// Albedo `Kd` (rgb), w unused.
+    pub kd: Vec4,
+    /// Emitted radiance `Ke` (rgb); w = 1 for an emitter (one-sided: front face only), else 0.
+    pub ke: Vec4,
+}
+
+/// Push constants of the G-buffer pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GBufferPush {
+    pub view_proj: Mat4,
+}
+
+/// One view of one sensor (paper §III-E): where it looks and which layer it draws into.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSensorView {
+    pub view_proj: Mat4,
+    /// Plane (n, −n·origin): geometry below it is clipped (hemicube side faces), `(0,0,0,1)` clips nothing.
+    pub clip_plane: Vec4,
+    /// Layer of the sensor-map array this view writes.
+    pub layer: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Push constants of the sensor-map pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SensorPush {
+    /// `Kd·ε` is what a non-emitting surface returns (paper eq. 2).
+    pub epsilon: f32,
+    /// First entry of the view buffer this draw reads.
+    pub first_view: u32,
+    pub _pad: [u32; 2],
+    /// Radiance of rays that leave the scene (rgb), w unused.
+    pub background: Vec4,
+}
+
+pub fn vertices(mesh: &Mesh) -> Vec<Vertex> {
+    mesh.triangles.iter().flat_map(|t| t.v.map(|p| Vertex { position: p.to_array(), surface: t.surface })).collect()
+}
+
+pub fn surfaces(mesh: &Mesh) -> Vec<GpuSurface> {
+    std::iter::once(GpuSurface::default())
+        .chain((1..=mesh.surfaces.len() as u32).map(|id| {
+            let m = mesh.material_of(id);
+            GpuSurface { kd: m.kd.extend(0.0), ke: m.ke.extend(if m.is_emitter() { 1.0 } else { 0.0 }) }
+        }))
+        .collect()
+}
+
+impl GpuSensorView {
+    pub fn new(view_proj: Mat4, clip_plane: Option<Vec4>, layer: u32) -> Self {
+        Self { view_proj, clip_plane: clip_plane.unwrap_or(Vec4::W), layer, _pad: [0; 3] }
+    }
+}
+
+/// Byte offset of each `Vertex` attribute, for the pipeline's vertex input description.
+pub const VERTEX_POSITION_OFFSET: u32 = std::mem::offset_of!(Vertex, position) as u32;
+pub const VERTEX_SURFACE_OFFSET: u32 = std::mem::offset_of!(Vertex, surface) as u32;
+
+const _: () = assert!(size_of::<Vertex>() == 16);

@@ -1,0 +1,24 @@
+//! sensorlight: global illumination by Sensor-Based Lighting (Banquiero & Leone) on Vulkan.
+//!
+//! Module map, in pipeline order (DESIGN.md §3):
+//! - [`scene`]: TOML scene files, OBJ/MTL meshes, surface ids, the camera;
+//! - [`vk`]: the Vulkan layer (device, buffers, images, pipelines), one owner per object;
+//! - [`gpu_types`] (+ `glsl/types.glsl`): the structs shared with shaders; [`gpu_scene`]: the scene on the GPU;
+//! - [`passes`]: the GPU passes, one per file, each beside its shaders in `glsl/`;
+//! - [`sensors`]: sensor frames, layer layouts and texel weights (shared by GPU and CPU);
+//! - [`reference`]: the CPU ray-casting reference of the same estimator;
+//! - [`output`]: EXR writing, always atomic.
+
+pub mod gpu_scene;
+pub mod gpu_types;
+pub mod output;
+pub mod passes;
+pub mod reference;
+pub mod scene;
+pub mod sensors;
+pub mod vk;
+
+/// SPIR-V of every shader in `glsl/`, compiled by build.rs: `glsl/gbuffer.vert` is `shaders::GBUFFER_VERT`.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

@@ -1,0 +1,5 @@
+//! What the program writes: EXR (linear radiance and AOVs), always atomically.
+
+pub mod atomic;
+pub mod exr;
+pub mod png;

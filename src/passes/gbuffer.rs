@@ -1,0 +1,198 @@
+//! G-buffer pass (paper §III-F, DESIGN.md §3 step 1): rasterises the scene from the camera into world
+//! position, normal, albedo, emission and surface id at the output resolution. Shaders: `glsl/gbuffer.*`.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use ash::vk;
+use glam::Vec4;
+
+use crate::gpu_scene::GpuScene;
+use crate::gpu_types::{GBufferPush, VERTEX_POSITION_OFFSET, VERTEX_SURFACE_OFFSET, Vertex};
+use crate::scene::{Camera, ImageSize, SurfaceId};
+use crate::shaders;
+use crate::vk::{
+    DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass,
+    SetWriter, transfer,
+};
+
+/// Colour attachments, in shader output order: position, normal, albedo, emission, surface id.
+pub const ATTACHMENT_COUNT: u32 = 5;
+const COLOR_FORMATS: [vk::Format; ATTACHMENT_COUNT as usize] = [
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32_UINT,
+];
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Camera near plane as a fraction of the scene's diagonal (reversed-Z: precision does not need it larger).
+pub const NEAR: f32 = 1e-3;
+
+pub struct GBufferPass {
+    // Field order is drop order: the pipeline before its layout and render pass.
+    pipeline: Pipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    layout: PipelineLayout,
+    render_pass: RenderPass,
+}
+
+/// The G-buffer images on the GPU, each in `GENERAL` layout after [`GBufferPass::render`].
+pub struct GBuffer {
+    _framebuffer: Framebuffer,
+    pub position: Image,
+    pub normal: Image,
+    pub albedo: Image,
+    pub emission: Image,
+    pub surface: Image,
+    _depth: Image,
+    pub size: ImageSize,
+}
+
+/// The G-buffer on the host, row-major from the top-left pixel.
+#[derive(Clone, Debug)]
+pub struct GBufferData {
+    pub size: ImageSize,
+    /// xyz world position; w = 1 where a surface is seen, 0 on the background.
+    pub position: Vec<Vec4>,
+    /// Unit normal turned towards the camera; w = 1 where the front side is seen.
+    pub normal: Vec<Vec4>,
+    pub albedo: Vec<Vec4>,
+    /// `Ke` where an emitter's front side is seen, else 0.
+    pub emission: Vec<Vec4>,
+    /// Surface id; [`crate::scene::NO_SURFACE`] on the background.
+    pub surface: Vec<SurfaceId>,
+}
+
+impl GBufferPass {
+    pub fn new(device: &Arc<Device>, scene: &GpuScene) -> Result<Self> {
+        let render_pass = RenderPass::new(device, &COLOR_FORMATS, Some(DEPTH_FORMAT), 0)?;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let layout = PipelineLayout::new(
+            device,
+            &[(0, storage, vk::ShaderStageFlags::FRAGMENT), (1, storage, vk::ShaderStageFlags::VERTEX)],
+            size_of::<GBufferPush>() as u32,
+            vk::ShaderStageFlags::VERTEX,
+        )?;
+        let pool = DescriptorPool::new(device, 1, &[(storage, 2)])?;
+        let set = pool.allocate(&layout)?;
+        SetWriter::new(set).storage_buffer(0, &scene.surfaces).storage_buffer(1, &scene.normals).apply(device);
+        let pipeline = Pipeline::graphics(
+            device,
+            &layout,
+            &GraphicsDesc {
+                vertex: shaders::GBUFFER_VERT,
+                fragment: shaders::GBUFFER_FRAG,
+                render_pass: render_pass.raw,
+                color_attachments: ATTACHMENT_COUNT,
+                vertex_stride: size_of::<Vertex>() as u32,
+                vertex_attributes: &[
+                    (0, vk::Format::R32G32B32_SFLOAT, VERTEX_POSITION_OFFSET),
+                    (1, vk::Format::R32_UINT, VERTEX_SURFACE_OFFSET),
+                ],
+                // Reversed-Z: nearer is larger.
+                depth_compare: Some(vk::CompareOp::GREATER),
+            },
+        )?;
+        Ok(Self { pipeline, _pool: pool, set, layout, render_pass })
+    }
+
+    /// Renders the G-buffer of `scene` seen by `camera` at `size`; `near` is the camera's near plane distance.
+    pub fn render(
+        &self,
+        device: &Arc<Device>,
+        scene: &GpuScene,
+        camera: &Camera,
+        size: ImageSize,
+        near: f32,
+    ) -> Result<GBuffer> {
+        let limits = &device.adapter.limits;
+        anyhow::ensure!(
+            size.width <= limits.max_framebuffer_width && size.height <= limits.max_framebuffer_height,
+            "image {}x{} exceeds this device's largest framebuffer ({}x{})",
+            size.width,
+            size.height,
+            limits.max_framebuffer_width,
+            limits.max_framebuffer_height
+        );
+        let image = |name: &str, format: vk::Format, usage: vk::ImageUsageFlags| {
+            Image::new(
+                device,
+                name,
+                ImageDesc {
+                    format,
+                    width: size.width,
+                    height: size.height,
+                    layers: 1,
+                    usage,
+                    view_type: vk::ImageViewType::TYPE_2D,
+                },
+            )
+        };
+        let color =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let [position, normal, albedo, emission, surface] = [
+            image("gbuffer position", COLOR_FORMATS[0], color)?,
+            image("gbuffer normal", COLOR_FORMATS[1], color)?,
+            image("gbuffer albedo", COLOR_FORMATS[2], color)?,
+            image("gbuffer emission", COLOR_FORMATS[3], color)?,
+            image("gbuffer surface id", COLOR_FORMATS[4], color)?,
+        ];
+        let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
+        let views = [position.view, normal.view, albedo.view, emission.view, surface.view, depth.view];
+        let framebuffer = Framebuffer::new(device, &self.render_pass, &views, position.extent(), 1)?;
+
+        let push = GBufferPush { view_proj: camera.view_proj(size.width, size.height, near) };
+        let zero = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
+        let clears = [
+            zero,
+            zero,
+            zero,
+            zero,
+            vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } },
+            vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
+        ];
+        device.submit_and_wait(|cmd| {
+            framebuffer.begin(cmd, &self.render_pass, &clears);
+            // SAFETY: recording state; every bound object outlives the submission (we wait on it).
+            unsafe {
+                device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
+                device.raw.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layout.raw,
+                    0,
+                    &[self.set],
+                    &[],
+                );
+                device.raw.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
+            }
+            self.layout.push(cmd, &push);
+            // SAFETY: as above.
+            unsafe {
+                device.raw.cmd_draw(cmd, scene.vertex_count, 1, 0, 0);
+                device.raw.cmd_end_render_pass(cmd);
+            }
+            Ok(())
+        })?;
+        Ok(GBuffer { _framebuffer: framebuffer, position, normal, albedo, emission, surface, _depth: depth, size })
+    }
+}
+
+impl GBuffer {
+    pub fn read_back(&self, device: &Arc<Device>) -> Result<GBufferData> {
+        let vec4s = |image: &Image| -> Result<Vec<Vec4>> {
+            Ok(transfer::read_image::<[f32; 4]>(device, image)?.into_iter().map(Vec4::from).collect())
+        };
+        Ok(GBufferData {
+            size: self.size,
+            position: vec4s(&self.position)?,
+            normal: vec4s(&self.normal)?,
+            albedo: vec4s(&self.albedo)?,
+            emission: vec4s(&self.emission)?,
+            surface: transfer::read_image::<u32>(device, &self.surface)?,
+        })
+    }
+}

@@ -1,0 +1,6 @@
+//! The CPU reference: an independent implementation of the same estimator by ray casting, the oracle every
+//! GPU image is tested against (DESIGN.md §5).
+
+pub mod bvh;
+pub mod gbuffer;
+pub mod ray;

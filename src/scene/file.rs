@@ -1,0 +1,83 @@
+//! The TOML scene file: which mesh, the camera, the image size and optional defaults for the algorithm.
+//!
+//! ```toml
+//! mesh = "cornell.obj"          # relative to the TOML file
+//! [camera]
+//! eye = [278, 273, -800]
+//! target = [278, 273, 0]
+//! up = [0, 1, 0]
+//! vfov_deg = 39.3               # full vertical angle
+//! [image]
+//! width = 256
+//! height = 256
+//! [render]                      # optional; every key is also a CLI flag, which wins
+//! sensor = "hemicube"           # or "frustum"
+//! ```
+//! Unknown keys are errors (a typo must not silently fall back to a default).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context as _, Result};
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// OBJ file, relative to the TOML file.
+    pub mesh: PathBuf,
+    pub camera: CameraSection,
+    pub image: ImageSection,
+    #[serde(default)]
+    pub render: RenderDefaults,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSection {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    pub vfov_deg: f32,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImageSection {
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Scene-specific defaults for the algorithm's parameters; see `sensorlight render --help` for each.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDefaults {
+    pub sensor: Option<String>,
+    pub fov_deg: Option<f32>,
+    pub sensor_size: Option<u32>,
+    pub tile: Option<u32>,
+    pub dradiance: Option<f32>,
+    pub epsilon: Option<f32>,
+    pub filter_radius: Option<u32>,
+    pub exposure: Option<f32>,
+    /// Radiance of rays that leave the scene, linear RGB.
+    pub background: Option<[f32; 3]>,
+}
+
+impl SceneFile {
+    pub fn read(path: &Path) -> Result<Self> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("cannot read scene file {}", path.display()))?;
+        // toml's message already names the line and column and quotes the offending text.
+        toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
+    /// The mesh path resolved against the directory of the scene file.
+    pub fn mesh_path(&self, scene_path: &Path) -> PathBuf {
+        scene_path.parent().unwrap_or(Path::new(".")).join(&self.mesh)
+    }
+}

@@ -1,0 +1,140 @@
+//! Scenes: triangles with materials and surface ids, a camera and an image size. Everything downstream (the
+//! GPU passes, the CPU reference) is handed a [`Scene`], never a parser.
+
+pub mod camera;
+pub mod file;
+pub mod obj;
+pub mod surfaces;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context as _, Result, ensure};
+use glam::Vec3;
+
+pub use camera::Camera;
+pub use file::RenderDefaults;
+pub use obj::Material;
+
+/// Surface ids are 1-based; 0 marks "no surface" (the background) in the G-buffer.
+pub type SurfaceId = u32;
+pub const NO_SURFACE: SurfaceId = 0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// Counter-clockwise seen from the front.
+    pub v: [Vec3; 3],
+    /// Unit normal of the front side: normalize((v1 − v0) × (v2 − v0)).
+    pub normal: Vec3,
+    pub surface: SurfaceId,
+}
+
+/// A surface: the triangles of one group and material that form one connected, nearly flat patch. The
+/// refinement and the filter never mix two surfaces (paper §III-G, §III-H).
+#[derive(Clone, Debug)]
+pub struct Surface {
+    /// "group/material", for messages and AOV legends.
+    pub name: String,
+    pub material: usize,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Self = Self { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    pub fn union(self, other: Self) -> Self {
+        Self { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub triangles: Vec<Triangle>,
+    /// Indexed by `SurfaceId - 1`.
+    pub surfaces: Vec<Surface>,
+    pub materials: Vec<Material>,
+    pub bounds: Aabb,
+}
+
+impl Mesh {
+    /// Builds the mesh from groups of triangles, dropping degenerate ones and assigning surface ids.
+    /// `warnings` receives what was dropped.
+    pub fn new(groups: &[obj::ObjGroup], materials: Vec<Material>, warnings: &mut Vec<String>) -> Result<Self> {
+        let (triangles, surfaces, degenerate) = surfaces::assign(groups, &materials);
+        if degenerate > 0 {
+            warnings.push(format!("dropped {degenerate} degenerate (zero-area) triangle(s)"));
+        }
+        ensure!(!triangles.is_empty(), "the mesh contains no triangles");
+        let mut bounds = Aabb::EMPTY;
+        for t in &triangles {
+            t.v.iter().for_each(|&p| bounds.grow(p));
+        }
+        Ok(Self { triangles, surfaces, materials, bounds })
+    }
+
+    pub fn material_of(&self, surface: SurfaceId) -> &Material {
+        &self.materials[self.surfaces[surface as usize - 1].material]
+    }
+
+    /// Scene scale: sensors are lifted and near planes placed relative to this length.
+    pub fn scale(&self) -> f32 {
+        self.bounds.diagonal().max(f32::MIN_POSITIVE)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageSize {
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file it came from, for messages.
+    pub path: PathBuf,
+    pub mesh: Mesh,
+    pub camera: Camera,
+    pub image: ImageSize,
+    pub render: RenderDefaults,
+    /// Warnings met while loading (undefined materials, dropped triangles, …).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line.
+    pub fn load(path: &Path) -> Result<Self> {
+        let file = file::SceneFile::read(path)?;
+        let c = &file.camera;
+        let camera = Camera::look_at(c.eye.into(), c.target.into(), c.up.into(), c.vfov_deg)
+            .with_context(|| format!("{}: [camera]", path.display()))?;
+        let image = ImageSize { width: file.image.width, height: file.image.height };
+        ensure!(
+            image.width >= 1 && image.height >= 1,
+            "{}: [image] width and height must be at least 1",
+            path.display()
+        );
+        let mesh_path = file.mesh_path(path);
+        let obj = obj::load(&mesh_path)?;
+        let mut warnings = obj.warnings;
+        let mesh =
+            Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings })
+    }
+}

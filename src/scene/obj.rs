@@ -1,0 +1,307 @@
+//! OBJ + MTL loading through `tobj`, behind a checking pass that gives every error its `file:line`.
+//!
+//! The checking pass also fixes what real files do and `tobj` does not expect: `# comments` after values,
+//! statements `tobj` does not know (curves, `lod`, …; dropped with a warning), and an `mtllib` path written
+//! relative to some other directory (looked for by file name next to the OBJ).
+
+use std::cell::RefCell;
+use std::collections::BTreeSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+/// A user error in a scene file, with its location.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct LoadError {
+    pub file: PathBuf,
+    pub line: Option<usize>,
+    pub message: String,
+}
+
+fn error(file: &Path, line: Option<usize>, message: impl fmt::Display) -> LoadError {
+    LoadError { file: file.to_owned(), line, message: message.to_string() }
+}
+
+/// A material as this renderer uses it: diffuse albedo and emitted radiance, linear RGB.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub kd: Vec3,
+    pub ke: Vec3,
+}
+
+impl Material {
+    pub const DEFAULT_KD: f32 = 0.8;
+
+    pub fn is_emitter(&self) -> bool {
+        self.ke.max_element() > 0.0
+    }
+}
+
+/// One polygon soup group as the file defines it: a `g`/`o` name and one material.
+pub struct ObjGroup {
+    pub name: String,
+    pub material: usize,
+    /// Triangles, fan-triangulated from the file's polygons, in file order.
+    pub triangles: Vec<[Vec3; 3]>,
+}
+
+pub struct ObjData {
+    pub groups: Vec<ObjGroup>,
+    pub materials: Vec<Material>,
+    pub warnings: Vec<String>,
+}
+
+/// OBJ statements that are valid but carry nothing this renderer uses (free-form geometry, display hints).
+const IGNORED_STATEMENTS: &[&str] = &[
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "mg",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "maplib",
+    "usemap",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+];
+
+pub fn load(path: &Path) -> Result<ObjData, LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| error(path, None, format!("cannot read mesh: {e}")))?;
+    let mut warnings = Vec::new();
+    let checked = check_obj(path, &text, &mut warnings)?;
+
+    let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
+    let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);
+    let mtl_warnings = RefCell::new(Vec::new());
+    let options =
+        tobj::LoadOptions { triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
+    let loaded = tobj::load_obj_buf(&mut checked.text.as_bytes(), &options, |mtllib| {
+        match load_mtl(&dir, mtllib, &mut mtl_warnings.borrow_mut()) {
+            Ok(result) => result,
+            Err(e) => {
+                mtl_error.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    });
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
+    warnings.extend(mtl_warnings.into_inner());
+    // The checking pass rejects everything tobj would; this is a guard, not an expected path.
+    let (models, materials) = loaded.map_err(|e| error(path, None, format!("OBJ parser: {e}")))?;
+    let tobj_materials = materials.unwrap_or_default();
+
+    let mut materials: Vec<Material> = tobj_materials
+        .iter()
+        .map(|m| Material {
+            name: m.name.clone(),
+            kd: m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(Material::DEFAULT_KD)),
+            ke: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        })
+        .collect();
+    let defined: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+    for (name, line) in &checked.used_materials {
+        if !defined.contains(name.as_str()) {
+            warnings.push(format!(
+                "{}:{line}: material '{name}' is not defined in any MTL file; using grey Kd {} and no emission",
+                path.display(),
+                Material::DEFAULT_KD
+            ));
+        }
+    }
+    let default_material = materials.len();
+    materials.push(Material { name: "(default grey)".into(), kd: Vec3::splat(Material::DEFAULT_KD), ke: Vec3::ZERO });
+
+    let groups = models
+        .into_iter()
+        .map(|model| {
+            let p = &model.mesh.positions;
+            let vertex = |i: u32| Vec3::new(p[3 * i as usize], p[3 * i as usize + 1], p[3 * i as usize + 2]);
+            let triangles =
+                model.mesh.indices.chunks_exact(3).map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])]).collect();
+            ObjGroup { name: model.name, material: model.mesh.material_id.unwrap_or(default_material), triangles }
+        })
+        .collect();
+    Ok(ObjData { groups, materials, warnings })
+}
+
+struct CheckedObj {
+    /// The file with comments stripped and ignorable statements blanked; line numbers are preserved.
+    text: String,
+    /// Material names used by `usemtl`, with the first line using each.
+    used_materials: Vec<(String, usize)>,
+}
+
+fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<CheckedObj, LoadError> {
+    let mut out = String::with_capacity(text.len());
+    let mut used_materials: Vec<(String, usize)> = Vec::new();
+    let mut counts = [0usize; 3]; // v, vt, vn seen so far
+    let mut ignored = BTreeSet::new();
+    for (index, raw) in text.lines().enumerate() {
+        let line_no = index + 1;
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let err = |message: String| error(path, Some(line_no), message);
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            out.push('\n');
+            continue;
+        };
+        let args: Vec<&str> = words.collect();
+        match keyword {
+            "v" => {
+                // x y z [w] or x y z r g b
+                if !matches!(args.len(), 3 | 4 | 6) {
+                    return Err(err(format!(
+                        "'v' takes 3 coordinates (optionally w, or r g b), found {} values",
+                        args.len()
+                    )));
+                }
+                let values = parse_numbers(&args)
+                    .map_err(|bad| err(format!("'v' has a value that is not a number: '{bad}'")))?;
+                if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
+                    return Err(err(format!("vertex coordinate {bad} is not finite")));
+                }
+                if args.len() == 4 && values[3] == 0.0 {
+                    return Err(err("vertex weight w is 0".into()));
+                }
+                counts[0] += 1;
+            }
+            "vt" | "vn" => {
+                parse_numbers(&args)
+                    .map_err(|bad| err(format!("'{keyword}' has a value that is not a number: '{bad}'")))?;
+                counts[if keyword == "vt" { 1 } else { 2 }] += 1;
+            }
+            "f" | "l" | "p" => {
+                if keyword == "f" && args.len() < 3 {
+                    return Err(err(format!("a face needs at least 3 vertices, found {}", args.len())));
+                }
+                for vertex in &args {
+                    check_face_vertex(vertex, &counts).map_err(|m| err(format!("face vertex '{vertex}': {m}")))?;
+                }
+            }
+            "usemtl" => {
+                let Some(name) = args.first() else { return Err(err("'usemtl' needs a material name".into())) };
+                if !used_materials.iter().any(|(n, _)| n == name) {
+                    used_materials.push(((*name).to_owned(), line_no));
+                }
+            }
+            "mtllib" => {
+                if args.is_empty() {
+                    return Err(err("'mtllib' needs a file name".into()));
+                }
+            }
+            "o" | "g" | "s" => {}
+            other if IGNORED_STATEMENTS.contains(&other) => {
+                ignored.insert(other.to_owned());
+                out.push('\n');
+                continue;
+            }
+            other => return Err(err(format!("unknown statement '{other}' (not an OBJ line)"))),
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    if !ignored.is_empty() {
+        warnings.push(format!(
+            "{}: ignored statements this renderer does not use: {}",
+            path.display(),
+            ignored.into_iter().collect::<Vec<_>>().join(", ")
+        ));
+    }
+    Ok(CheckedObj { text: out, used_materials })
+}
+
+fn parse_numbers<'a>(args: &[&'a str]) -> Result<Vec<f32>, &'a str> {
+    args.iter().map(|a| a.parse::<f32>().map_err(|_| *a)).collect()
+}
+
+/// `v`, `v/vt`, `v//vn` or `v/vt/vn`: 1-based, or negative counting back from the last element defined.
+fn check_face_vertex(vertex: &str, counts: &[usize; 3]) -> Result<(), String> {
+    let parts: Vec<&str> = vertex.split('/').collect();
+    if parts.len() > 3 || parts[0].is_empty() {
+        return Err("expected v, v/vt, v//vn or v/vt/vn".into());
+    }
+    for (slot, part) in parts.iter().enumerate() {
+        if part.is_empty() {
+            continue;
+        }
+        let index: i64 = part.parse().map_err(|_| format!("'{part}' is not an integer index"))?;
+        let count = counts[slot] as i64;
+        let valid = (index > 0 && index <= count) || (index < 0 && -index <= count);
+        if !valid {
+            let what = ["vertex", "texture coordinate", "normal"][slot];
+            return Err(format!("{what} index {index} does not refer to one of the {count} defined so far"));
+        }
+    }
+    Ok(())
+}
+
+/// Loads an MTL named by `mtllib`: beside the OBJ as written, else by file name beside the OBJ.
+fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<tobj::MTLLoadResult, LoadError> {
+    let as_written = dir.join(requested);
+    let by_name = requested.file_name().map(|name| dir.join(name));
+    let path = if as_written.is_file() {
+        as_written
+    } else if let Some(found) = by_name.filter(|p| p.is_file()) {
+        warnings.push(format!(
+            "mtllib '{}' does not resolve from {}; using {} found by file name",
+            requested.display(),
+            dir.display(),
+            found.display()
+        ));
+        found
+    } else {
+        // Its materials then count as undefined: grey, each with its own warning.
+        warnings.push(format!(
+            "material library '{}' not found (looked in {} and for its file name there)",
+            requested.display(),
+            dir.display()
+        ));
+        return Ok(Err(tobj::LoadError::OpenFileFailed));
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
+    let checked = check_mtl(&path, &text)?;
+    Ok(tobj::load_mtl_buf(&mut checked.as_bytes()))
+}
+
+/// Strips `# comments` and checks the colour statements this renderer reads (`Kd`, `Ke`).
+fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
+    let mut out = String::with_capacity(text.len());
+    for (index, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut words = line.split_whitespace();
+        if let Some(keyword @ ("Kd" | "Ke" | "Ka" | "Ks")) = words.next() {
+            let args: Vec<&str> = words.collect();
+            let values = parse_numbers(&args)
+                .map_err(|bad| error(path, Some(index + 1), format!("'{keyword}' value '{bad}' is not a number")))?;
+            if values.len() != 3 || values.iter().any(|v| !v.is_finite() || *v < 0.0) {
+                return Err(error(path, Some(index + 1), format!("'{keyword}' needs 3 finite non-negative numbers")));
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    Ok(out)
+}

@@ -1,0 +1,147 @@
+//! Surface ids: within each group (one material), triangles that share an edge and bend by less than
+//! [`CREASE_DEG`] belong to one surface. A box becomes six surfaces, a finely tessellated sphere one; the
+//! refinement (which also compares normals) and the id-constrained filter then treat each as one piece.
+//! Ids are numbered in the order of each surface's first triangle in the file, so they are stable.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::obj::{Material, ObjGroup};
+use super::{Surface, SurfaceId, Triangle};
+
+/// Largest angle between the normals of two edge-sharing triangles of one surface.
+pub const CREASE_DEG: f32 = 30.0;
+
+/// Returns the non-degenerate triangles with their surface ids, the surfaces, and how many degenerate
+/// triangles were dropped.
+pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<Surface>, usize) {
+    let mut triangles = Vec::new();
+    let mut surfaces = Vec::new();
+    let mut degenerate = 0;
+    let cos_crease = CREASE_DEG.to_radians().cos();
+
+    for group in groups {
+        let mut local: Vec<([Vec3; 3], Vec3)> = Vec::with_capacity(group.triangles.len());
+        for &v in &group.triangles {
+            match face_normal(v) {
+                Some(n) => local.push((v, n)),
+                None => degenerate += 1,
+            }
+        }
+        let mut sets = DisjointSets::new(local.len());
+        let mut edges: HashMap<[[u32; 3]; 2], Vec<usize>> = HashMap::new();
+        for (i, (v, _)) in local.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (bits(v[k]), bits(v[(k + 1) % 3]));
+                let key = if a <= b { [a, b] } else { [b, a] };
+                let sharing = edges.entry(key).or_default();
+                for &j in sharing.iter() {
+                    if local[i].1.dot(local[j].1) >= cos_crease {
+                        sets.union(i, j);
+                    }
+                }
+                sharing.push(i);
+            }
+        }
+        // Number this group's surfaces by first appearance.
+        let mut ids: HashMap<usize, SurfaceId> = HashMap::new();
+        let first = surfaces.len();
+        for (i, &(v, normal)) in local.iter().enumerate() {
+            let root = sets.find(i);
+            let surface = *ids.entry(root).or_insert_with(|| {
+                surfaces.push(Surface { name: String::new(), material: group.material });
+                surfaces.len() as SurfaceId
+            });
+            triangles.push(Triangle { v, normal, surface });
+        }
+        let count = surfaces.len() - first;
+        let material = &materials[group.material].name;
+        for (k, surface) in surfaces[first..].iter_mut().enumerate() {
+            surface.name = if count == 1 {
+                format!("{}/{material}", group.name)
+            } else {
+                format!("{}/{material}#{k}", group.name)
+            };
+        }
+    }
+    (triangles, surfaces, degenerate)
+}
+
+/// The unit front normal (CCW winding), or `None` for a triangle without area.
+pub fn face_normal(v: [Vec3; 3]) -> Option<Vec3> {
+    let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+    let longest =
+        (v[1] - v[0]).length_squared().max((v[2] - v[1]).length_squared()).max((v[0] - v[2]).length_squared());
+    // Relative test: area must not vanish against the triangle's own size.
+    (cross.length() > 1e-7 * longest).then(|| cross.normalize())
+}
+
+fn bits(p: Vec3) -> [u32; 3] {
+    // +0.0 and −0.0 are the same point.
+    [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()]
+}
+
+struct DisjointSets {
+    parent: Vec<usize>,
+}
+
+impl DisjointSets {
+    fn new(n: usize) -> Self {
+        Self { parent: (0..n).collect() }
+    }
+
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            // Keep the earlier triangle as root so numbering by first appearance is independent of union order.
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad(corners: [Vec3; 4]) -> Vec<[Vec3; 3]> {
+        vec![[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]]
+    }
+
+    #[test]
+    fn box_faces_are_separate_surfaces_and_quads_are_one() {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+        let o = Vec3::ZERO;
+        let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
+        triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
+        let groups = [ObjGroup { name: "box".into(), material: 0, triangles }];
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
+        let (tris, surfaces, degenerate) = assign(&groups, &materials);
+        assert_eq!(degenerate, 0);
+        assert_eq!(surfaces.len(), 2);
+        let ids: Vec<_> = tris.iter().map(|t| t.surface).collect();
+        assert_eq!(ids, [1, 1, 2, 2]);
+        assert_eq!(surfaces[0].name, "box/m#0");
+    }
+
+    #[test]
+    fn degenerate_triangles_are_dropped() {
+        let groups = [ObjGroup {
+            name: "g".into(),
+            material: 0,
+            triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],
+        }];
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
+        let (tris, surfaces, degenerate) = assign(&groups, &materials);
+        assert_eq!((tris.len(), surfaces.len(), degenerate), (1, 1, 1));
+        assert!((tris[0].normal - Vec3::Z).length() < 1e-6);
+    }
+}

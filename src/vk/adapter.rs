@@ -1,0 +1,198 @@
+//! Physical devices ("adapters"): what they are, the limits this program depends on, and which one to use.
+
+use std::fmt;
+
+use anyhow::{Result, bail};
+use ash::vk;
+
+use super::instance::{INSTALL_HINT, Instance};
+
+/// The limits and features that decide batch sizes and which sensor strategies can run.
+#[derive(Clone, Debug)]
+pub struct Limits {
+    pub max_image_dimension_2d: u32,
+    pub max_image_array_layers: u32,
+    pub max_framebuffer_layers: u32,
+    pub max_framebuffer_width: u32,
+    pub max_framebuffer_height: u32,
+    pub max_multiview_view_count: u32,
+    pub max_color_attachments: u32,
+    pub max_compute_shared_memory_size: u32,
+    pub max_compute_work_group_invocations: u32,
+    pub max_compute_work_group_count: [u32; 3],
+    pub max_storage_buffer_range: u32,
+    pub max_push_constants_size: u32,
+    pub max_memory_allocation_size: u64,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+}
+
+/// Optional features; the device is created with every one that is present.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Features {
+    /// `gl_Layer` written from the vertex shader (Vulkan 1.2 `shaderOutputLayer`): layered sensor rendering.
+    pub shader_output_layer: bool,
+    /// `VK_KHR_multiview` (core in 1.1).
+    pub multiview: bool,
+    /// `gl_ClipDistance`: two half hemicube faces share one layer.
+    pub shader_clip_distance: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct Adapter {
+    /// Position in `vkEnumeratePhysicalDevices`, the number `--device` takes.
+    pub index: usize,
+    pub handle: vk::PhysicalDevice,
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub driver: String,
+    pub api_version: u32,
+    /// A queue family with graphics and compute, if any.
+    pub queue_family: Option<u32>,
+    /// Size of the largest device-local heap, in bytes.
+    pub device_local_bytes: u64,
+    pub limits: Limits,
+    pub features: Features,
+}
+
+impl Adapter {
+    /// Whether this program can run on it at all, and if not, why.
+    pub fn unsupported_reason(&self) -> Option<String> {
+        if self.api_version < vk::API_VERSION_1_2 {
+            return Some(format!("Vulkan {} < 1.2", version_string(self.api_version)));
+        }
+        if self.queue_family.is_none() {
+            return Some("no queue family with graphics and compute".into());
+        }
+        if self.limits.max_color_attachments < crate::passes::gbuffer::ATTACHMENT_COUNT {
+            return Some(format!("only {} colour attachments", self.limits.max_color_attachments));
+        }
+        None
+    }
+
+    /// Preference order: discrete GPU, integrated GPU, virtual GPU, CPU (e.g. lavapipe), anything else.
+    fn rank(&self) -> u32 {
+        match self.kind {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 3,
+            _ => 4,
+        }
+    }
+
+    pub fn kind_name(&self) -> &'static str {
+        match self.kind {
+            vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+            vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+            vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+            vk::PhysicalDeviceType::CPU => "CPU",
+            _ => "other",
+        }
+    }
+}
+
+impl fmt::Display for Adapter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} ({}, {})", self.name, self.kind_name(), self.driver)
+    }
+}
+
+pub fn version_string(v: u32) -> String {
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+}
+
+/// Every physical device the loader reports, in its order.
+pub fn enumerate(instance: &Instance) -> Result<Vec<Adapter>> {
+    let raw = &instance.raw;
+    // SAFETY: queries on a valid instance.
+    let handles = unsafe { raw.enumerate_physical_devices() }?;
+    if handles.is_empty() {
+        bail!("no Vulkan device found; {INSTALL_HINT}");
+    }
+    Ok(handles.into_iter().enumerate().map(|(index, handle)| describe(instance, index, handle)).collect())
+}
+
+fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Adapter {
+    let raw = &instance.raw;
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut multiview = vk::PhysicalDeviceMultiviewProperties::default();
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver)
+        .push_next(&mut multiview)
+        .push_next(&mut maintenance3);
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut features11 = vk::PhysicalDeviceVulkan11Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12).push_next(&mut features11);
+    // SAFETY: queries on a valid physical device; the chained structs outlive the calls.
+    let (families, memory) = unsafe {
+        raw.get_physical_device_properties2(handle, &mut props);
+        raw.get_physical_device_features2(handle, &mut features);
+        (raw.get_physical_device_queue_family_properties(handle), raw.get_physical_device_memory_properties(handle))
+    };
+    // Copied out so that the chain's borrows of `features11`/`features12` end before they are read.
+    let core_features = features.features;
+    let p = props.properties;
+    let l = &p.limits;
+    let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+    let queue_family = families.iter().position(|f| f.queue_flags.contains(wanted)).map(|i| i as u32);
+    let device_local_bytes = memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
+    let name = p.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    Adapter {
+        index,
+        handle,
+        name,
+        kind: p.device_type,
+        driver: format!("{driver_name} {driver_info}").trim().to_owned(),
+        api_version: p.api_version,
+        queue_family,
+        device_local_bytes,
+        limits: Limits {
+            max_image_dimension_2d: l.max_image_dimension2_d,
+            max_image_array_layers: l.max_image_array_layers,
+            max_framebuffer_layers: l.max_framebuffer_layers,
+            max_framebuffer_width: l.max_framebuffer_width,
+            max_framebuffer_height: l.max_framebuffer_height,
+            max_multiview_view_count: multiview.max_multiview_view_count,
+            max_color_attachments: l.max_color_attachments,
+            max_compute_shared_memory_size: l.max_compute_shared_memory_size,
+            max_compute_work_group_invocations: l.max_compute_work_group_invocations,
+            max_compute_work_group_count: l.max_compute_work_group_count,
+            max_storage_buffer_range: l.max_storage_buffer_range,
+            max_push_constants_size: l.max_push_constants_size,
+            max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+            timestamp_period: l.timestamp_period,
+        },
+        features: Features {
+            shader_output_layer: features12.shader_output_layer == vk::TRUE,
+            multiview: features11.multiview == vk::TRUE,
+            shader_clip_distance: core_features.shader_clip_distance == vk::TRUE,
+        },
+    }
+}
+
+/// The adapter to use: `requested` (an index from `sensorlight devices`) or the best supported one.
+pub fn select(adapters: &[Adapter], requested: Option<usize>) -> Result<&Adapter> {
+    if let Some(index) = requested {
+        let Some(adapter) = adapters.get(index) else {
+            bail!("--device {index}: there are only {} device(s); see `sensorlight devices`", adapters.len());
+        };
+        if let Some(why) = adapter.unsupported_reason() {
+            bail!("--device {index} ({adapter}) cannot run sensorlight: {why}");
+        }
+        return Ok(adapter);
+    }
+    adapters.iter().filter(|a| a.unsupported_reason().is_none()).min_by_key(|a| (a.rank(), a.index)).ok_or_else(|| {
+        let found: Vec<String> =
+            adapters.iter().map(|a| format!("{a}: {}", a.unsupported_reason().unwrap_or_default())).collect();
+        anyhow::anyhow!("no usable Vulkan device (found: {}); {INSTALL_HINT}", found.join("; "))
+    })
+}

@@ -1,0 +1,199 @@
+//! The logical device: the one owner of the instance, the queue, the memory allocator and a command pool
+//! for synchronous submissions. Every other Vulkan object holds an `Arc<Device>` and destroys itself first.
+
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use super::adapter::{self, Adapter};
+use super::instance::Instance;
+use super::validation::ValidationLog;
+
+/// How to open a device.
+#[derive(Clone, Debug, Default)]
+pub struct DeviceOptions {
+    /// Enable the Khronos validation layer and record its messages.
+    pub validation: bool,
+    /// Index from `sensorlight devices`; `None` picks the best supported device.
+    pub device_index: Option<usize>,
+}
+
+impl DeviceOptions {
+    /// Validation from `SENSORLIGHT_VALIDATION=1`, device from the `--device` flag.
+    pub fn from_env(device_index: Option<usize>) -> Self {
+        let validation = std::env::var("SENSORLIGHT_VALIDATION").is_ok_and(|v| v == "1");
+        Self { validation, device_index }
+    }
+}
+
+pub struct Device {
+    pub raw: ash::Device,
+    pub adapter: Adapter,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    submitter: Mutex<Submitter>,
+    // Declared last: dropped after `Drop::drop` has destroyed the device.
+    instance: Instance,
+}
+
+/// A reusable command buffer and fence for record-submit-wait work.
+struct Submitter {
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+impl Device {
+    pub fn new(options: &DeviceOptions) -> Result<Arc<Self>> {
+        let instance = Instance::new(options.validation)?;
+        let adapters = adapter::enumerate(&instance)?;
+        let adapter = adapter::select(&adapters, options.device_index)?.clone();
+        let queue_family = adapter.queue_family.expect("selected adapters have a queue family");
+
+        let f = adapter.features;
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default().shader_output_layer(f.shader_output_layer);
+        let mut features11 = vk::PhysicalDeviceVulkan11Features::default().multiview(f.multiview);
+        let core = vk::PhysicalDeviceFeatures::default().shader_clip_distance(f.shader_clip_distance);
+        let mut features =
+            vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut features12).push_next(&mut features11);
+        let priorities = [1.0];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).push_next(&mut features);
+        // SAFETY: the physical device comes from this instance; every pointer outlives the call.
+        let raw = unsafe { instance.raw.create_device(adapter.handle, &info, None) }
+            .with_context(|| format!("cannot create a Vulkan device on {adapter}"))?;
+        // SAFETY: queue 0 of a family we asked one queue of.
+        let queue = unsafe { raw.get_device_queue(queue_family, 0) };
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: raw.clone(),
+            physical_device: adapter.handle,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: nothing was created from the device yet.
+                unsafe { raw.destroy_device(None) };
+                return Err(e).context("cannot create the memory allocator");
+            }
+        };
+        let submitter = match Submitter::new(&raw, queue_family) {
+            Ok(s) => s,
+            Err(e) => {
+                drop(allocator);
+                // SAFETY: the allocator (the only child) is gone.
+                unsafe { raw.destroy_device(None) };
+                return Err(e);
+            }
+        };
+        Ok(Arc::new(Self {
+            raw,
+            adapter,
+            queue,
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            submitter: Mutex::new(submitter),
+            instance,
+        }))
+    }
+
+    pub fn instance(&self) -> &ash::Instance {
+        &self.instance.raw
+    }
+
+    /// What the validation layer reported so far. Keep a clone to read it after the device is gone.
+    pub fn validation_log(&self) -> &Arc<ValidationLog> {
+        self.instance.log()
+    }
+
+    pub fn validation_enabled(&self) -> bool {
+        self.instance.validation_enabled()
+    }
+
+    pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap()
+    }
+
+    /// Records `record` into a command buffer, submits it and waits. Returns the host time from submission to
+    /// the fence (the GPU time on a device that runs nothing else, e.g. lavapipe).
+    pub fn submit_and_wait(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<()>) -> Result<Duration> {
+        let submitter = self.submitter.lock().unwrap();
+        let cmd = submitter.cmd;
+        // SAFETY: the command buffer is only used under the mutex and is idle (its fence was waited on).
+        unsafe {
+            self.raw.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            self.raw.begin_command_buffer(cmd, &begin)?;
+        }
+        let recorded = record(cmd);
+        // SAFETY: as above; the buffer is ended even when recording failed so that it can be reset later.
+        unsafe { self.raw.end_command_buffer(cmd)? };
+        recorded?;
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let start = Instant::now();
+        // SAFETY: the fence is unsignalled (reset after each wait) and owned by this submitter.
+        unsafe {
+            self.raw.queue_submit(self.queue, &submit, submitter.fence).context("vkQueueSubmit")?;
+            self.raw.wait_for_fences(&[submitter.fence], true, u64::MAX).context("vkWaitForFences")?;
+            self.raw.reset_fences(&[submitter.fence])?;
+        }
+        Ok(start.elapsed())
+    }
+}
+
+impl Submitter {
+    fn new(device: &ash::Device, queue_family: u32) -> Result<Self> {
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: plain object creation on a valid device; on failure what was created is destroyed.
+        unsafe {
+            let pool = device.create_command_pool(&info, None)?;
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            let cmd = match device.allocate_command_buffers(&alloc) {
+                Ok(c) => c[0],
+                Err(e) => {
+                    device.destroy_command_pool(pool, None);
+                    return Err(e.into());
+                }
+            };
+            let fence = match device.create_fence(&vk::FenceCreateInfo::default(), None) {
+                Ok(f) => f,
+                Err(e) => {
+                    device.destroy_command_pool(pool, None);
+                    return Err(e.into());
+                }
+            };
+            Ok(Self { pool, cmd, fence })
+        }
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: every child object holds an `Arc<Device>`, so all of them are gone; waiting idle makes the
+        // submitter's objects free to destroy. The allocator frees its memory blocks before the device goes.
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            let submitter = self.submitter.get_mut().unwrap();
+            self.raw.destroy_fence(submitter.fence, None);
+            self.raw.destroy_command_pool(submitter.pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.raw.destroy_device(None);
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! Copies between the GPU and the host: the read-backs every test and output writer uses.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::barrier;
+use super::buffer::Buffer;
+use super::device::Device;
+use super::image::Image;
+
+/// Bytes per texel of the formats this program reads back.
+pub fn texel_bytes(format: vk::Format) -> Result<usize> {
+    Ok(match format {
+        vk::Format::R32_UINT | vk::Format::R32_SFLOAT => 4,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
+        other => anyhow::bail!("no read-back for format {other:?}"),
+    })
+}
+
+/// Copies every layer of `image` (in `GENERAL` layout, its writers finished) to the host, layer-major, rows
+/// top to bottom, as `T` (e.g. `[f32; 4]` for RGBA32F, `u32` for R32_UINT, `[u16; 4]` for RGBA16F).
+pub fn read_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image) -> Result<Vec<T>> {
+    let d = image.desc;
+    let texel = texel_bytes(d.format)?;
+    anyhow::ensure!(
+        texel == size_of::<T>(),
+        "read_image: {:?} texels are {texel} bytes, not {}",
+        d.format,
+        size_of::<T>()
+    );
+    let count = d.width as usize * d.height as usize * d.layers as usize;
+    let staging = Buffer::new(
+        device,
+        "image read-back",
+        (count * texel) as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
+    device.submit_and_wait(|cmd| {
+        let range = image.full_range();
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: range.aspect_mask,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: d.layers,
+            })
+            .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })];
+        // Every pass leaves its images in GENERAL; copies read best from TRANSFER_SRC_OPTIMAL.
+        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+        // SAFETY: the image is in TRANSFER_SRC_OPTIMAL now; the buffer is large enough.
+        unsafe {
+            device.raw.cmd_copy_image_to_buffer(
+                cmd,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                staging.raw,
+                &region,
+            )
+        };
+        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::GENERAL);
+        barrier::to_host(device, cmd);
+        Ok(())
+    })?;
+    staging.read(count)
+}
+
+/// Copies the first `count` elements of a device buffer to the host.
+pub fn read_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, count: usize) -> Result<Vec<T>> {
+    let bytes = (count * size_of::<T>()) as u64;
+    anyhow::ensure!(bytes <= buffer.size, "read_buffer: {bytes} bytes from a buffer of {}", buffer.size);
+    let staging =
+        Buffer::new(device, "buffer read-back", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    if bytes > 0 {
+        device.submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy::default().size(bytes)];
+            // SAFETY: both buffers are alive until the wait returns; sizes checked above.
+            unsafe { device.raw.cmd_copy_buffer(cmd, buffer.raw, staging.raw, &region) };
+            barrier::to_host(device, cmd);
+            Ok(())
+        })?;
+    }
+    staging.read(count)
+}

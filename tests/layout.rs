@@ -1,0 +1,89 @@
+//! Rust ↔ GLSL struct layouts: member offsets and array strides read out of the compiled SPIR-V of
+//! `glsl/layout_probe.comp` (binding k holds an array of the k-th shared struct) against `src/gpu_types.rs`.
+
+use std::collections::HashMap;
+use std::mem::offset_of;
+
+use sensorlight::gpu_types::{GBufferPush, GpuSensorView, GpuSurface, SensorPush};
+use sensorlight::shaders;
+
+const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
+const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const OP_DECORATE: u32 = 71;
+const OP_MEMBER_DECORATE: u32 = 72;
+const DECORATION_ARRAY_STRIDE: u32 = 6;
+const DECORATION_BINDING: u32 = 33;
+const DECORATION_OFFSET: u32 = 35;
+
+/// For each descriptor binding: the element struct's member offsets and the array stride.
+fn layouts(spirv: &[u8]) -> HashMap<u32, (Vec<u32>, u32)> {
+    let words: Vec<u32> = spirv.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().unwrap())).collect();
+    assert_eq!(words[0], 0x0723_0203, "not SPIR-V");
+    let (mut binding, mut stride) = (HashMap::new(), HashMap::new());
+    let mut offsets: HashMap<u32, Vec<(u32, u32)>> = HashMap::new();
+    let (mut pointee, mut variable_type) = (HashMap::new(), HashMap::new());
+    let (mut struct_members, mut array_element) = (HashMap::new(), HashMap::new());
+    let mut i = 5;
+    while i < words.len() {
+        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let w = &words[i..i + count];
+        match op {
+            OP_DECORATE if w[2] == DECORATION_BINDING => {
+                binding.insert(w[1], w[3]);
+            }
+            OP_DECORATE if w[2] == DECORATION_ARRAY_STRIDE => {
+                stride.insert(w[1], w[3]);
+            }
+            OP_MEMBER_DECORATE if w[3] == DECORATION_OFFSET => offsets.entry(w[1]).or_default().push((w[2], w[4])),
+            OP_TYPE_POINTER => {
+                pointee.insert(w[1], w[3]);
+            }
+            OP_VARIABLE => {
+                variable_type.insert(w[2], w[1]);
+            }
+            OP_TYPE_STRUCT => {
+                struct_members.insert(w[1], w[2..].to_vec());
+            }
+            OP_TYPE_RUNTIME_ARRAY => {
+                array_element.insert(w[1], w[2]);
+            }
+            _ => {}
+        }
+        i += count;
+    }
+    let mut out = HashMap::new();
+    for (variable, b) in binding {
+        // variable → pointer → block struct → member 0 (runtime array) → element struct
+        let block = pointee[&variable_type[&variable]];
+        let array = struct_members[&block][0];
+        let element = array_element[&array];
+        let mut members = offsets.remove(&element).unwrap_or_default();
+        members.sort();
+        assert_eq!(members.len(), struct_members[&element].len(), "every member has an offset");
+        out.insert(b, (members.into_iter().map(|(_, offset)| offset).collect(), stride[&array]));
+    }
+    out
+}
+
+macro_rules! rust_layout {
+    ($t:ty: $($field:ident),+) => {
+        (vec![$(offset_of!($t, $field) as u32),+], size_of::<$t>() as u32)
+    };
+}
+
+#[test]
+fn shared_structs_match_glsl() {
+    let glsl = layouts(shaders::LAYOUT_PROBE_COMP);
+    let rust = [
+        (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
+        (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
+        (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip_plane, layer, _pad)),
+        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, _pad, background)),
+    ];
+    assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
+    for (binding, name, expected) in rust {
+        assert_eq!(glsl[&binding], expected, "{name}: (member offsets, size) in GLSL vs Rust");
+    }
+}
