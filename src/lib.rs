@@ -7,11 +7,13 @@
 //! - [`passes`]: the GPU passes, one per file, each beside its shaders in `glsl/`;
 //! - [`sensors`]: sensor frames, layer layouts and texel weights (shared by GPU and CPU);
 //! - [`reference`]: the CPU ray-casting reference of the same estimator;
-//! - [`output`]: EXR writing, always atomic.
+//! - [`params`]: the algorithm's parameters, defaults and checks;
+//! - [`output`]: EXR and PNG writing, always atomic.
 
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod output;
+pub mod params;
 pub mod passes;
 pub mod reference;
 pub mod scene;

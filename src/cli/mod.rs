@@ -1,6 +1,8 @@
 //! Sub-commands. Each parses its flags here and hands the library a scene and parameters.
 
+mod args;
 mod devices;
+mod reference;
 mod render;
 
 use std::process::ExitCode;
@@ -8,6 +10,8 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use sensorlight::scene::Scene;
 use sensorlight::vk::{Device, DeviceOptions};
 
 #[derive(Parser)]
@@ -25,12 +29,15 @@ enum Command {
     Devices,
     /// Render a scene to an EXR.
     Render(render::RenderArgs),
+    /// Compute the CPU reference image of the same estimator by ray casting (no GPU needed).
+    Reference(reference::ReferenceArgs),
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Devices => devices::run(),
         Command::Render(args) => render::run(args),
+        Command::Reference(args) => reference::run(args),
     }
 }
 
@@ -53,4 +60,18 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
         return Ok(ExitCode::from(EXIT_VALIDATION));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn print_warnings(scene: &Scene) {
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+fn progress_bar(total: u64, unit: &str) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");
+    bar.set_style(ProgressStyle::with_template(&template).unwrap().progress_chars("=> "));
+    bar
 }

@@ -34,9 +34,7 @@ pub struct RenderArgs {
 
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
-    for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
-    }
+    super::print_warnings(&scene);
     let size =
         ImageSize { width: args.width.unwrap_or(scene.image.width), height: args.height.unwrap_or(scene.image.height) };
     anyhow::ensure!(size.width >= 1 && size.height >= 1, "--width and --height must be at least 1");

@@ -3,4 +3,6 @@
 
 pub mod bvh;
 pub mod gbuffer;
+pub mod integrator;
 pub mod ray;
+pub mod sampling;

@@ -44,3 +44,54 @@ pub fn stderr(output: &Output) -> String {
 pub fn project(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
+
+use glam::Vec3;
+use sensorlight::scene::obj::{Material, ObjGroup};
+use sensorlight::scene::{Camera, ImageSize, Mesh, RenderDefaults, Scene};
+
+/// An axis-aligned rectangle as two triangles, wound so that its front faces `facing`.
+pub fn rect(center: Vec3, half_u: Vec3, half_v: Vec3, facing: Vec3) -> Vec<[Vec3; 3]> {
+    let c = [center - half_u - half_v, center + half_u - half_v, center + half_u + half_v, center - half_u + half_v];
+    let flip = half_u.cross(half_v).dot(facing) < 0.0;
+    let tris = vec![[c[0], c[1], c[2]], [c[0], c[2], c[3]]];
+    if flip { tris.into_iter().map(|[a, b, c]| [a, c, b]).collect() } else { tris }
+}
+
+pub fn material(name: &str, kd: f32, ke: f32) -> Material {
+    Material { name: name.into(), kd: Vec3::splat(kd), ke: Vec3::splat(ke) }
+}
+
+/// A scene built in code: `groups` are (name, material index, triangles).
+pub fn scene(
+    groups: Vec<(&str, usize, Vec<[Vec3; 3]>)>,
+    materials: Vec<Material>,
+    camera: Camera,
+    size: (u32, u32),
+) -> Scene {
+    let groups: Vec<ObjGroup> = groups
+        .into_iter()
+        .map(|(name, material, triangles)| ObjGroup { name: name.into(), material, triangles })
+        .collect();
+    let mut warnings = Vec::new();
+    Scene {
+        path: "(built in a test)".into(),
+        mesh: Mesh::new(&groups, materials, &mut warnings).unwrap(),
+        camera,
+        image: ImageSize { width: size.0, height: size.1 },
+        render: RenderDefaults::default(),
+        warnings,
+    }
+}
+
+/// A closed cube of side 2 centred at the origin, every face emitting `ke` towards the inside, camera inside.
+pub fn furnace(ke: f32) -> Scene {
+    let mut tris = Vec::new();
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+        let (u, v) = (axis.any_orthonormal_pair().0, axis.any_orthonormal_pair().1);
+        for sign in [1.0, -1.0] {
+            tris.extend(rect(axis * sign, u, v, -axis * sign));
+        }
+    }
+    let camera = Camera::look_at(Vec3::new(0.3, 0.2, 0.5), Vec3::new(-0.4, -0.5, -1.0), Vec3::Y, 90.0).unwrap();
+    scene(vec![("box", 0, tris)], vec![material("glow", 0.5, ke)], camera, (24, 24))
+}

@@ -1,0 +1,81 @@
+//! Flags shared by several sub-commands, and how they become [`Overrides`].
+
+use anyhow::{Result, ensure};
+use clap::Args;
+use sensorlight::params::Overrides;
+use sensorlight::scene::{ImageSize, Scene};
+
+/// What a sensor sees: shared by `render` and `reference`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct EstimatorFlags {
+    /// Sensor kind: `hemicube` (whole hemisphere) or `frustum` (the paper's single view) [default: hemicube]
+    #[arg(long)]
+    pub sensor: Option<String>,
+    /// Field of view of frustum sensors, degrees, in (0, 180) [default: 135]
+    #[arg(long = "fov", allow_negative_numbers = true)]
+    pub fov_deg: Option<f32>,
+    /// ε: non-emitters seen by a sensor return Kd·ε (≥ 0; 0 = direct light only) [default: 0.1]
+    #[arg(long, allow_negative_numbers = true)]
+    pub epsilon: Option<f32>,
+    /// Radiance of rays leaving the scene, as R,G,B [default: 0,0,0]
+    #[arg(long, value_parser = parse_rgb, allow_negative_numbers = true)]
+    pub background: Option<[f32; 3]>,
+}
+
+/// Output size and preview: shared by `render` and `reference`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ImageFlags {
+    /// Image width in pixels [default: the scene's]
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: the scene's]
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Exposure of the PNG preview, in stops [default: 0]
+    #[arg(long, allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+    /// Write a tone-mapped sRGB PNG beside the EXR (the default)
+    #[arg(long, overrides_with = "no_png")]
+    pub png: bool,
+    /// Do not write the PNG
+    #[arg(long, overrides_with = "png")]
+    pub no_png: bool,
+}
+
+impl EstimatorFlags {
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            sensor: self.sensor.clone(),
+            fov_deg: self.fov_deg,
+            epsilon: self.epsilon,
+            background: self.background,
+            ..Default::default()
+        }
+    }
+}
+
+impl ImageFlags {
+    pub fn write_png(&self) -> bool {
+        !self.no_png
+    }
+
+    /// The output size: these flags, else the scene's `[image]`.
+    pub fn size(&self, scene: &Scene) -> Result<ImageSize> {
+        let size = ImageSize {
+            width: self.width.unwrap_or(scene.image.width),
+            height: self.height.unwrap_or(scene.image.height),
+        };
+        ensure!(size.width >= 1 && size.height >= 1, "--width and --height must be at least 1");
+        Ok(size)
+    }
+}
+
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let values: Result<Vec<f32>, _> = parts.iter().map(|p| p.trim().parse::<f32>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 => Ok([v[0], v[1], v[2]]),
+        Ok(v) if v.len() == 1 => Ok([v[0]; 3]),
+        _ => Err(format!("expected R,G,B (or one value for grey), got '{s}'")),
+    }
+}
