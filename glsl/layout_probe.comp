@@ -9,6 +9,9 @@ layout(std430, set = 0, binding = 0) buffer Surfaces { GpuSurface surfaces[]; };
 layout(std430, set = 0, binding = 1) buffer GBufferPushes { GBufferPush gbuffer_pushes[]; };
 layout(std430, set = 0, binding = 2) buffer SensorViews { GpuSensorView sensor_views[]; };
 layout(std430, set = 0, binding = 3) buffer SensorPushes { SensorPush sensor_pushes[]; };
+layout(std430, set = 0, binding = 4) buffer ReducePushes { ReducePush reduce_pushes[]; };
+layout(std430, set = 0, binding = 5) buffer Quads { GpuQuad quads[]; };
+layout(std430, set = 0, binding = 6) buffer ImagePushes { ImagePush image_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -16,4 +19,7 @@ void main() {
     gbuffer_pushes[1] = gbuffer_pushes[0];
     sensor_views[1] = sensor_views[0];
     sensor_pushes[1] = sensor_pushes[0];
+    reduce_pushes[1] = reduce_pushes[0];
+    quads[1] = quads[0];
+    image_pushes[1] = image_pushes[0];
 }

@@ -24,7 +24,38 @@ struct SensorPush {
     float epsilon;     // non-emitters return Kd * epsilon (paper eq. 2)
     uint first_view;   // first entry of the view buffer for this draw
     uint _pad[2];
-    vec4 background;   // radiance of rays leaving the scene
 };
+
+struct ReducePush {
+    uint rd;            // sensor map side
+    uint layers;        // layers per sensor
+    uint first_sensor;  // index into the batch's pixel list of workgroup 0's sensor
+    uint _pad;
+};
+
+// Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).
+struct GpuQuad {
+    uint x0;
+    uint y0;
+    uint x1;
+    uint y1;
+    uint own_x1;
+    uint own_y1;
+    uint _pad[2];
+};
+
+struct ImagePush {
+    uint width;
+    uint height;
+    uint radius;  // filter radius
+    uint count;   // number of quads
+};
+
+// w of the radiance map: how R was obtained (src/gpu_types.rs radiance_state).
+const float STATE_NONE = 0.0;
+const float STATE_SENSED = 1.0;
+const float STATE_INTERPOLATED = 2.0;
+
+const float PI = 3.14159265358979323846;
 
 #endif

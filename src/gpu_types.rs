@@ -55,8 +55,52 @@ pub struct SensorPush {
     /// First entry of the view buffer this draw reads.
     pub first_view: u32,
     pub _pad: [u32; 2],
-    /// Radiance of rays that leave the scene (rgb), w unused.
-    pub background: Vec4,
+}
+
+/// Push constants of the reduction: which sensors of the batch, and the map geometry.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ReducePush {
+    /// Sensor map side, texels.
+    pub rd: u32,
+    /// Layers per sensor (1 frustum, 3 hemicube).
+    pub layers: u32,
+    /// Index into the batch's pixel list of workgroup 0's sensor.
+    pub first_sensor: u32,
+    pub _pad: u32,
+}
+
+/// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).
+/// Corners are sensed pixels; the quad fills `[x0, own_x1] × [y0, own_y1]` (its share of shared edges).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuQuad {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+    pub own_x1: u32,
+    pub own_y1: u32,
+    pub _pad: [u32; 2],
+}
+
+/// Push constants of the passes that work on whole images (interpolation, filter, composition).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ImagePush {
+    pub width: u32,
+    pub height: u32,
+    /// Filter radius in pixels (filter pass only).
+    pub radius: u32,
+    /// Number of items (quads for the interpolation pass).
+    pub count: u32,
+}
+
+/// Values of `w` in the radiance map: how a pixel's R was obtained.
+pub mod radiance_state {
+    pub const NONE: f32 = 0.0;
+    pub const SENSED: f32 = 1.0;
+    pub const INTERPOLATED: f32 = 2.0;
 }
 
 pub fn vertices(mesh: &Mesh) -> Vec<Vertex> {

@@ -6,6 +6,7 @@
 //! - [`gpu_types`] (+ `glsl/types.glsl`): the structs shared with shaders; [`gpu_scene`]: the scene on the GPU;
 //! - [`passes`]: the GPU passes, one per file, each beside its shaders in `glsl/`;
 //! - [`sensors`]: sensor frames, layer layouts and texel weights (shared by GPU and CPU);
+//! - [`renderer`]: one render end to end, the passes in order;
 //! - [`reference`]: the CPU ray-casting reference of the same estimator;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
 //! - [`output`]: EXR and PNG writing, always atomic.
@@ -16,6 +17,7 @@ pub mod output;
 pub mod params;
 pub mod passes;
 pub mod reference;
+pub mod renderer;
 pub mod scene;
 pub mod sensors;
 pub mod vk;

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::mem::offset_of;
 
-use sensorlight::gpu_types::{GBufferPush, GpuSensorView, GpuSurface, SensorPush};
+use sensorlight::gpu_types::{GBufferPush, GpuQuad, GpuSensorView, GpuSurface, ImagePush, ReducePush, SensorPush};
 use sensorlight::shaders;
 
 const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
@@ -80,7 +80,10 @@ fn shared_structs_match_glsl() {
         (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
         (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip_plane, layer, _pad)),
-        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, _pad, background)),
+        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, _pad)),
+        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, first_sensor, _pad)),
+        (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
+        (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -1,6 +1,7 @@
 //! Sub-commands. Each parses its flags here and hands the library a scene and parameters.
 
 mod args;
+mod compare;
 mod devices;
 mod reference;
 mod render;
@@ -31,6 +32,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Compute the CPU reference image of the same estimator by ray casting (no GPU needed).
     Reference(reference::ReferenceArgs),
+    /// Compare an image with a reference image: relative RMSE, mean error and bias over lit pixels.
+    Compare(compare::CompareArgs),
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
@@ -38,6 +41,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Devices => devices::run(),
         Command::Render(args) => render::run(args),
         Command::Reference(args) => reference::run(args),
+        Command::Compare(args) => compare::run(args),
     }
 }
 

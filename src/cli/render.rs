@@ -1,61 +1,140 @@
-//! `sensorlight render`: scene in, EXR out.
+//! `sensorlight render`: scene in, EXR (+ PNG preview, + stats) out.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use clap::Args;
-use glam::Vec4;
-use sensorlight::gpu_scene::GpuScene;
-use sensorlight::output::exr::ExrImage;
-use sensorlight::passes::gbuffer::{self, GBufferPass};
-use sensorlight::scene::{ImageSize, Scene};
+use indicatif::ProgressBar;
+use sensorlight::gpu_types::radiance_state;
+use sensorlight::output::{atomic, exr::ExrImage, png};
+use sensorlight::params::{Overrides, RenderParams};
+use sensorlight::renderer::{Progress, RenderOutput, RenderStats, Renderer};
+use sensorlight::scene::Scene;
+
+use super::args::{EstimatorFlags, ImageFlags};
 
 #[derive(Args)]
-#[command(long_about = "Render a scene to an EXR.\n\n\
-    Until the sensor pipeline lands this writes the G-buffer AOVs: RGB = emission + albedo (unlit), and the \
-    channel groups albedo.*, normal.*, position.* and surface_id.")]
 pub struct RenderArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Output EXR file (written to a temporary name, then renamed).
+    /// Output EXR (linear radiance), written to a temporary name and renamed.
     #[arg(short, long)]
     output: PathBuf,
-    /// Image width in pixels (default: the scene's [image] width).
+    #[command(flatten)]
+    estimator: EstimatorFlags,
+    #[command(flatten)]
+    image: ImageFlags,
+    /// rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: 256]
     #[arg(long)]
-    width: Option<u32>,
-    /// Image height in pixels (default: the scene's [image] height).
+    sensor_size: Option<u32>,
+    /// dt: initial sensor grid step, a power of two [default: 16]
     #[arg(long)]
-    height: Option<u32>,
-    /// Device index from `sensorlight devices` (default: the best available).
+    tile: Option<u32>,
+    /// Interpolate a quad when R varies by less than this between its corners (0 = sense every pixel) [default: 0.2]
+    #[arg(long, allow_negative_numbers = true)]
+    dradiance: Option<f32>,
+    /// Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: 2]
+    #[arg(long)]
+    filter_radius: Option<u32>,
+    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), surface_id
+    #[arg(long)]
+    aovs: bool,
+    /// Write the render statistics as JSON to this file
+    #[arg(long)]
+    stats_json: Option<PathBuf>,
+    /// Memory for one batch of sensor maps, MiB [default: 1/8 of the device's local memory]
+    #[arg(long)]
+    memory_budget: Option<u64>,
+    /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
+}
+
+impl RenderArgs {
+    fn overrides(&self) -> Overrides {
+        Overrides {
+            sensor_size: self.sensor_size,
+            tile: self.tile,
+            dradiance: self.dradiance,
+            filter_radius: self.filter_radius,
+            exposure: self.image.exposure,
+            ..self.estimator.overrides()
+        }
+    }
+}
+
+/// The progress bar over sensors: its length grows as refinement rounds add sensors.
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn queued(&self, n: u64) {
+        self.0.inc_length(n);
+    }
+    fn done(&self, n: u64) {
+        self.0.inc(n);
+    }
 }
 
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
     super::print_warnings(&scene);
-    let size =
-        ImageSize { width: args.width.unwrap_or(scene.image.width), height: args.height.unwrap_or(scene.image.height) };
-    anyhow::ensure!(size.width >= 1 && size.height >= 1, "--width and --height must be at least 1");
+    let params = RenderParams::resolve(&scene.render, &args.overrides())?;
+    let size = args.image.size(&scene)?;
     super::with_device(args.device, |device| {
-        let gpu_scene = GpuScene::upload(device, &scene)?;
-        let pass = GBufferPass::new(device, &gpu_scene)?;
-        let near = gbuffer::NEAR * scene.mesh.scale();
-        let g = pass.render(device, &gpu_scene, &scene.camera, size, near)?.read_back(device)?;
-        let unlit: Vec<Vec4> =
-            g.albedo.iter().zip(&g.emission).map(|(a, e)| (a.truncate() + e.truncate()).extend(1.0)).collect();
-        ExrImage::new(size.width, size.height)
-            .rgb("", &unlit)
-            .rgb("albedo", &g.albedo)
-            .rgb("normal", &g.normal)
-            .rgb("position", &g.position)
-            .scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
-            .write(&args.output)?;
-        eprintln!("wrote {}", args.output.display());
-        let png_path = args.output.with_extension("png");
-        sensorlight::output::png::write(&png_path, size.width, size.height, &unlit, 0.0)?;
-        eprintln!("wrote {}", png_path.display());
-        Ok(())
+        let budget = args.memory_budget.map(|mib| mib << 20);
+        let mut renderer = Renderer::new(device, &scene, params.estimator.sensor, params.sensor_size, budget)?;
+        let bar = Bar(super::progress_bar(0, "sensors"));
+        let output = renderer.render(&scene, size, &params, &bar)?;
+        bar.0.finish_and_clear();
+        print_stats(&output.stats);
+        write_outputs(&args, &params, &output)
     })
+}
+
+fn print_stats(s: &RenderStats) {
+    let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
+    eprintln!(
+        "{} sensors ({}, rd {}) in {} batches of up to {}; per refinement round: {}; {} quads interpolated",
+        s.sensors,
+        s.sensor,
+        s.sensor_size,
+        s.batches,
+        s.batch_size,
+        rounds.join(" + "),
+        s.interpolated_quads
+    );
+    eprintln!(
+        "{:.2} s total, sensor time {:.4} ms (total / sensors); GPU {:.2} s sensors + {:.2} s other, host {:.2} s; {}",
+        s.total_seconds, s.sensor_time_ms, s.gpu_sensor_seconds, s.gpu_other_seconds, s.host_seconds, s.device
+    );
+}
+
+fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -> Result<()> {
+    let size = out.size;
+    let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
+    if args.aovs {
+        let mask = out.radiance.iter().map(|r| match r.w {
+            w if w == radiance_state::SENSED => 1.0,
+            w if w == radiance_state::INTERPOLATED => 0.5,
+            _ => 0.0,
+        });
+        exr = exr
+            .rgb("radiance", &out.radiance)
+            .scalar("sensor_mask", mask.collect())
+            .scalar("surface_id", out.gbuffer.surface.iter().map(|&s| s as f32).collect());
+    }
+    exr.write(&args.output)?;
+    eprintln!("wrote {}", args.output.display());
+    if args.image.write_png() {
+        let path = args.output.with_extension("png");
+        png::write(&path, size.width, size.height, &out.image, params.exposure)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.stats_json {
+        let json = serde_json::to_string_pretty(&out.stats).context("stats to JSON")?;
+        atomic::write_bytes(path, json.as_bytes())?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
 }

@@ -80,8 +80,8 @@ impl Bvh {
         Self { nodes, vertices, order }
     }
 
-    /// The nearest hit in `(0, t_max)`.
-    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    /// The nearest hit in `(t_min, t_max)`.
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let shear = RayShear::new(ray);
         let inv = ray.dir.recip();
         let mut best: Option<Hit> = None;
@@ -97,7 +97,9 @@ impl Bvh {
             if node.count > 0 {
                 let range = node.first as usize..(node.first + node.count) as usize;
                 for k in range {
-                    if let Some(t) = shear.intersect(&self.vertices[k], t_best) {
+                    if let Some(t) = shear.intersect(&self.vertices[k], t_best)
+                        && t > t_min
+                    {
                         t_best = t;
                         best = Some(Hit { t, triangle: self.order[k] });
                     }
@@ -251,7 +253,7 @@ mod tests {
                 .enumerate()
                 .filter_map(|(i, t)| shear.intersect(&t.v, f32::INFINITY).map(|t| (t, i)))
                 .min_by(|a, b| a.0.total_cmp(&b.0));
-            let fast = bvh.intersect(&ray, f32::INFINITY);
+            let fast = bvh.intersect(&ray, 0.0, f32::INFINITY);
             assert_eq!(brute.map(|(t, i)| (t, i as u32)), fast.map(|h| (h.t, h.triangle)));
         }
     }

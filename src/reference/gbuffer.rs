@@ -15,7 +15,7 @@ pub fn cast(scene: &Scene, bvh: &Bvh, size: ImageSize) -> GBufferData {
         .map(|i| {
             let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
             let ray = scene.camera.ray(x, y, size.width, size.height);
-            let Some(hit) = bvh.intersect(&ray, f32::INFINITY) else {
+            let Some(hit) = bvh.intersect(&ray, 0.0, f32::INFINITY) else {
                 return (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, NO_SURFACE);
             };
             let tri = &scene.mesh.triangles[hit.triangle as usize];

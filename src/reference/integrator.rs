@@ -5,7 +5,9 @@
 //!
 //! Directions are cosine-distributed, so `R` is the plain mean of `Ck` over them. The domain is the sensor's:
 //! the whole hemisphere (hemicube) or the paper's square frustum, turned by the same [`SensorFrame`] as the
-//! GPU sensor (directions outside it count 0). Rays leave from the sensor's origin `p + n·bias`.
+//! GPU sensor (directions outside it count 0). Rays leave from the sensor's origin `p + n·bias` and, like
+//! the GPU views with their near plane, do not see geometry closer than [`frame::NEAR`] (relative to the
+//! scene): a point on the seam of two walls then sees the room, not the back of the other wall at 1e-8.
 //!
 //! Noise estimate: the samples are split into [`REPLICATES`] independently scrambled Sobol nets; the spread
 //! of their means gives an unbiased standard error of the estimate (randomised quasi-Monte Carlo).
@@ -34,6 +36,7 @@ pub struct Integrator<'a> {
     samples: u32,
     seed: u64,
     bias: f32,
+    near: f32,
     /// Half-width of the frustum on the plane z = 1; `None` for the whole hemisphere.
     frustum: Option<f32>,
 }
@@ -70,6 +73,7 @@ impl<'a> Integrator<'a> {
         Ok(Self {
             bvh: Bvh::build(&scene.mesh.triangles),
             bias: frame::BIAS * scene.mesh.scale(),
+            near: frame::NEAR * scene.mesh.scale(),
             scene,
             params,
             samples,
@@ -82,9 +86,9 @@ impl<'a> Integrator<'a> {
         &self.bvh
     }
 
-    /// `Ck` of the first surface along `ray` (paper §III-C).
+    /// `Ck` of the first surface along the unit-direction `ray` beyond the near distance (paper §III-C).
     pub fn ck(&self, ray: &Ray) -> Vec3 {
-        let Some(hit) = self.bvh.intersect(ray, f32::INFINITY) else { return self.params.background };
+        let Some(hit) = self.bvh.intersect(ray, self.near, f32::INFINITY) else { return self.params.background };
         let tri = &self.scene.mesh.triangles[hit.triangle as usize];
         let material = self.scene.mesh.material_of(tri.surface);
         let front = ray.dir.dot(tri.normal) < 0.0;
@@ -137,9 +141,7 @@ impl<'a> Integrator<'a> {
         let lit = estimates.iter().filter(|e| e.is_some()).count() as u64;
         let radiance: Vec<Vec4> = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |e| e.mean.extend(1.0))).collect();
         let std_error = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |e| e.std_error.extend(1.0))).collect();
-        let image = (0..radiance.len())
-            .map(|i| (g.emission[i].truncate() + g.albedo[i].truncate() * radiance[i].truncate()).extend(1.0))
-            .collect();
+        let image = super::post::compose(&g, &radiance);
         let rays = g.position.len() as u64 + lit * self.samples as u64;
         ReferenceImage { gbuffer: g, radiance, std_error, image, rays }
     }

@@ -4,5 +4,6 @@
 pub mod bvh;
 pub mod gbuffer;
 pub mod integrator;
+pub mod post;
 pub mod ray;
 pub mod sampling;

@@ -2,10 +2,12 @@
 //!
 //! - [`frame`]: where a sensor sits and how it is oriented, and the view of each of its faces;
 //! - [`layout`]: which layers of the sensor-map array a sensor's faces occupy;
-//! - [`weights`]: the projected solid angle of every texel, shared by the GPU reduction and the tests.
+//! - [`weights`]: the projected solid angle of every texel, shared by the GPU reduction and the tests;
+//! - [`refine`]: where sensors go: the grid and its adaptive refinement.
 
 pub mod frame;
 pub mod layout;
+pub mod refine;
 pub mod weights;
 
 use std::fmt;
@@ -56,7 +58,7 @@ impl SensorKind {
         ensure!(rd <= max_image_side, "--sensor-size {rd} exceeds this device's largest image side ({max_image_side})");
         if self == Self::Hemicube {
             ensure!(
-                rd % 2 == 0,
+                rd.is_multiple_of(2),
                 "--sensor-size must be even for hemicube sensors (two half faces share a layer), got {rd}"
             );
         }

@@ -4,6 +4,7 @@
 pub mod adapter;
 pub mod barrier;
 pub mod buffer;
+pub mod compute;
 pub mod descriptor;
 pub mod device;
 pub mod image;
@@ -15,6 +16,7 @@ pub mod validation;
 
 pub use adapter::Adapter;
 pub use buffer::Buffer;
+pub use compute::ComputeKernel;
 pub use descriptor::{DescriptorPool, SetWriter};
 pub use device::{Device, DeviceOptions};
 pub use image::{Image, ImageDesc};

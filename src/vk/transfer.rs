@@ -77,6 +77,8 @@ pub fn read_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, coun
         Buffer::new(device, "buffer read-back", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
     if bytes > 0 {
         device.submit_and_wait(|cmd| {
+            // Writes of earlier submissions (e.g. compute passes) become visible to this copy.
+            barrier::memory(device, cmd, vk::PipelineStageFlags::ALL_COMMANDS, vk::PipelineStageFlags::TRANSFER);
             let region = [vk::BufferCopy::default().size(bytes)];
             // SAFETY: both buffers are alive until the wait returns; sizes checked above.
             unsafe { device.raw.cmd_copy_buffer(cmd, buffer.raw, staging.raw, &region) };
@@ -85,4 +87,51 @@ pub fn read_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, coun
         })?;
     }
     staging.read(count)
+}
+
+/// Fills every layer of `image` with `data` (layer-major, rows top to bottom) and leaves it in `GENERAL`.
+pub fn write_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image, data: &[T]) -> Result<()> {
+    let d = image.desc;
+    let count = d.width as usize * d.height as usize * d.layers as usize;
+    anyhow::ensure!(data.len() == count && texel_bytes(d.format)? == size_of::<T>(), "write_image: wrong data size");
+    let mut staging = Buffer::new(
+        device,
+        "image upload",
+        size_of_val(data) as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(0, data)?;
+    device.submit_and_wait(|cmd| {
+        let range = image.full_range();
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: range.aspect_mask,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: d.layers,
+            })
+            .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })];
+        barrier::layout(
+            device,
+            cmd,
+            image.raw,
+            range,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        );
+        // SAFETY: the image is in TRANSFER_DST_OPTIMAL; the buffer holds exactly the image's texels.
+        unsafe {
+            device.raw.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            )
+        };
+        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
+        Ok(())
+    })?;
+    Ok(())
 }

@@ -6,6 +6,8 @@ use std::sync::{Arc, Mutex};
 
 use ash::vk;
 
+const PRINTED: usize = 10;
+
 /// Messages of severity warning or error reported by the debug messenger, in arrival order.
 #[derive(Default, Debug)]
 pub struct ValidationLog {
@@ -22,8 +24,14 @@ impl ValidationLog {
     }
 
     fn push(&self, message: String) {
-        eprintln!("validation: {message}");
-        self.messages.lock().unwrap().push(message);
+        let mut messages = self.messages.lock().unwrap();
+        // The first few are printed as they come; a broken loop can report thousands.
+        if messages.len() < PRINTED {
+            eprintln!("validation: {message}");
+        } else if messages.len() == PRINTED {
+            eprintln!("validation: further messages are counted, not printed");
+        }
+        messages.push(message);
     }
 }
 

@@ -95,3 +95,60 @@ pub fn furnace(ke: f32) -> Scene {
     let camera = Camera::look_at(Vec3::new(0.3, 0.2, 0.5), Vec3::new(-0.4, -0.5, -1.0), Vec3::Y, 90.0).unwrap();
     scene(vec![("box", 0, tris)], vec![material("glow", 0.5, ke)], camera, (24, 24))
 }
+
+/// A closed-back room (open towards the camera) with a large ceiling light and a block: an accuracy test
+/// scene whose light is large enough that the CPU reference converges quickly.
+pub fn lightbox(size: (u32, u32)) -> Scene {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let c = Vec3::new(0.0, 1.0, 0.0);
+    let mut groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, x, z, y)),
+        ("ceiling", 0, rect(2.0 * y, x, z, -y)),
+        ("back", 0, rect(c - z, x, y, z)),
+        ("left", 1, rect(c - x, z, y, x)),
+        ("right", 2, rect(c + x, z, y, -x)),
+        ("light", 3, rect(1.99 * y, x * 0.5, z * 0.5, -y)),
+    ];
+    let (center, half) = (Vec3::new(0.3, 0.35, -0.2), Vec3::new(0.25, 0.35, 0.25));
+    for (n, u, v) in [(x, z, y), (-x, z, y), (z, x, y), (-z, x, y), (y, x, z)] {
+        groups.push(("block", 0, rect(center + n * half, u * half, v * half, n)));
+    }
+    let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), c, y, 40.0).unwrap();
+    let materials = vec![
+        Material { name: "white".into(), kd: Vec3::splat(0.7), ke: Vec3::ZERO },
+        Material { name: "red".into(), kd: Vec3::new(0.7, 0.1, 0.1), ke: Vec3::ZERO },
+        Material { name: "green".into(), kd: Vec3::new(0.1, 0.7, 0.1), ke: Vec3::ZERO },
+        Material { name: "light".into(), kd: Vec3::splat(0.5), ke: Vec3::splat(4.0) },
+    ];
+    scene(groups, materials, camera, size)
+}
+
+/// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
+pub fn every_pixel(
+    sensor: sensorlight::sensors::SensorKind,
+    rd: u32,
+    epsilon: f32,
+) -> sensorlight::params::RenderParams {
+    sensorlight::params::RenderParams {
+        estimator: sensorlight::params::EstimatorParams { sensor, epsilon, background: Vec3::ZERO },
+        sensor_size: rd,
+        tile: 1,
+        dradiance: 0.0,
+        filter_radius: 0,
+        exposure: 0.0,
+    }
+}
+
+/// Renders `scene` on a validated GPU.
+pub fn render(
+    scene: &Scene,
+    params: &sensorlight::params::RenderParams,
+    budget: Option<u64>,
+) -> sensorlight::renderer::RenderOutput {
+    gpu(|device| {
+        let mut renderer =
+            sensorlight::renderer::Renderer::new(device, scene, params.estimator.sensor, params.sensor_size, budget)
+                .unwrap();
+        renderer.render(scene, scene.image, params, &sensorlight::renderer::Quiet).unwrap()
+    })
+}

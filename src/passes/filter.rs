@@ -1,0 +1,46 @@
+//! Id-constrained Gaussian filter (paper §III-H, DESIGN.md §3 step 6): a Gaussian of radius r, σ = r/2,
+//! over the radiance map, taking only samples of the centre pixel's surface id. Shader: `glsl/filter.comp`.
+//! CPU twin: [`crate::reference::post::filter`].
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use ash::vk;
+
+use crate::gpu_types::ImagePush;
+use crate::scene::ImageSize;
+use crate::shaders;
+use crate::vk::{Buffer, ComputeKernel, Device, Image, compute::groups_for};
+
+pub struct FilterPass {
+    kernel: ComputeKernel,
+}
+
+impl FilterPass {
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let kernel = ComputeKernel::new(
+            device,
+            shaders::FILTER_COMP,
+            &[(0, storage), (1, storage), (2, vk::DescriptorType::STORAGE_IMAGE)],
+            size_of::<ImagePush>() as u32,
+        )?;
+        Ok(Self { kernel })
+    }
+
+    /// Filters `source` into `target` with the surface ids of the G-buffer (call while the GPU is idle).
+    pub fn bind(&self, device: &Device, source: &Buffer, target: &Buffer, surface_ids: &Image) {
+        self.kernel
+            .writer()
+            .storage_buffer(0, source)
+            .storage_buffer(1, target)
+            .storage_image(2, surface_ids.view)
+            .apply(device);
+    }
+
+    /// Radius 0 copies the source unchanged.
+    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, size: ImageSize, radius: u32) {
+        let push = ImagePush { width: size.width, height: size.height, radius, count: 0 };
+        self.kernel.dispatch(device, cmd, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
+    }
+}

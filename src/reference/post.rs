@@ -1,0 +1,45 @@
+//! CPU twins of the GPU post-passes, used to test them: the id-constrained filter and the composition.
+//! (The interpolation's twin sits with the refinement that defines it: `sensors::refine::interpolate_cpu`.)
+
+use glam::{Vec3, Vec4};
+
+use crate::passes::gbuffer::GBufferData;
+use crate::scene::{ImageSize, NO_SURFACE, SurfaceId};
+
+/// Gaussian of radius `radius` (σ = radius/2) over `source`, only over pixels of the centre's surface id,
+/// weights renormalised over the pixels taken (paper §III-H). Background pixels and radius 0 pass through.
+pub fn filter(source: &[Vec4], ids: &[SurfaceId], size: ImageSize, radius: u32) -> Vec<Vec4> {
+    let (w, h, r) = (size.width as i64, size.height as i64, radius as i64);
+    let inv_two_sigma2 = if r > 0 { 1.0 / (0.5 * (r * r) as f32) } else { 0.0 };
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let id = ids[i as usize];
+            if id == NO_SURFACE || r == 0 {
+                return source[i as usize];
+            }
+            let (mut sum, mut weight) = (Vec3::ZERO, 0.0);
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let (qx, qy) = (x + dx, y + dy);
+                    if qx < 0 || qy < 0 || qx >= w || qy >= h || ids[(qy * w + qx) as usize] != id {
+                        continue;
+                    }
+                    let k = (-((dx * dx + dy * dy) as f32) * inv_two_sigma2).exp();
+                    sum += k * source[(qy * w + qx) as usize].truncate();
+                    weight += k;
+                }
+            }
+            (sum / weight).extend(source[i as usize].w)
+        })
+        .collect()
+}
+
+/// `Le + Kd·R` per pixel.
+pub fn compose(g: &GBufferData, radiance: &[Vec4]) -> Vec<Vec4> {
+    radiance
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (g.emission[i].truncate() + g.albedo[i].truncate() * r.truncate()).extend(1.0))
+        .collect()
+}

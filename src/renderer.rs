@@ -1,0 +1,273 @@
+//! One render, end to end (DESIGN.md §3): G-buffer → sensors on the grid → rounds of refinement, each
+//! sensing a batch list on the GPU (sensor maps + reduction) → interpolation → id-constrained filter →
+//! composition. The CPU only decides where sensors go; every image operation runs on the GPU.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use ash::vk;
+use glam::{Vec3, Vec4};
+use gpu_allocator::MemoryLocation;
+use serde::Serialize;
+
+use crate::gpu_scene::GpuScene;
+use crate::params::RenderParams;
+use crate::passes::compose::ComposePass;
+use crate::passes::filter::FilterPass;
+use crate::passes::gbuffer::{self, GBufferData, GBufferPass};
+use crate::passes::interpolate::InterpolatePass;
+use crate::passes::reduce::ReducePass;
+use crate::passes::sensor_maps::{self, SensorMapPass};
+use crate::scene::{ImageSize, Scene};
+use crate::sensors::SensorKind;
+use crate::sensors::frame::{self, SensorFrame};
+use crate::sensors::refine::Refinement;
+use crate::vk::{Buffer, Device, barrier, transfer};
+
+/// Progress callbacks for long renders.
+pub trait Progress {
+    /// `n` more sensors will be rendered.
+    fn queued(&self, _n: u64) {}
+    /// `n` more sensors are done.
+    fn done(&self, _n: u64) {}
+}
+
+/// No progress reporting.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// The GPU state for rendering one scene with one kind and size of sensor, reusable across renders.
+pub struct Renderer {
+    // Field order is drop order; all of these hold the device.
+    maps: SensorMapPass,
+    reduce: ReducePass,
+    interpolate: InterpolatePass,
+    filter: FilterPass,
+    compose: ComposePass,
+    gbuffer: GBufferPass,
+    scene: GpuScene,
+    device: Arc<Device>,
+    kind: SensorKind,
+    rd: u32,
+    scale: f32,
+}
+
+/// What a render measured, as printed and as written by `--stats-json`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RenderStats {
+    pub device: String,
+    pub driver: String,
+    pub sensor: String,
+    pub sensor_size: u32,
+    pub width: u32,
+    pub height: u32,
+    pub tile: u32,
+    pub dradiance: f32,
+    pub epsilon: f32,
+    pub filter_radius: u32,
+    /// Sensors rendered, in total and per refinement round.
+    pub sensors: u64,
+    pub sensors_per_round: Vec<u64>,
+    pub interpolated_quads: u64,
+    pub batch_size: u32,
+    pub batches: u64,
+    /// Wall time of the whole render.
+    pub total_seconds: f64,
+    /// Time from submission to completion of the sensor batches (sensor maps + reduction).
+    pub gpu_sensor_seconds: f64,
+    /// Time from submission to completion of the other GPU work (G-buffer, post-passes, read-backs).
+    pub gpu_other_seconds: f64,
+    /// The rest: placing sensors, building views, refinement decisions, waiting on nothing.
+    pub host_seconds: f64,
+    /// The paper's metric: total time / sensors, in milliseconds.
+    pub sensor_time_ms: f64,
+}
+
+pub struct RenderOutput {
+    pub size: ImageSize,
+    /// `Le + albedo·R`.
+    pub image: Vec<Vec4>,
+    /// R after interpolation and filtering; w says how it was obtained (see `gpu_types::radiance_state`).
+    pub radiance: Vec<Vec4>,
+    pub gbuffer: GBufferData,
+    pub stats: RenderStats,
+}
+
+/// Budget for one batch's sensor maps when none is given: an eighth of the device's largest local heap.
+pub fn default_memory_budget(device: &Device) -> u64 {
+    device.adapter.device_local_bytes / 8
+}
+
+impl Renderer {
+    /// `memory_budget`: bytes for one batch's sensor maps and depth (default [`default_memory_budget`]).
+    pub fn new(
+        device: &Arc<Device>,
+        scene: &Scene,
+        kind: SensorKind,
+        rd: u32,
+        memory_budget: Option<u64>,
+    ) -> Result<Self> {
+        let limits = &device.adapter.limits;
+        kind.check_size(rd, limits.max_image_dimension_2d.min(limits.max_framebuffer_width))?;
+        let scale = scene.mesh.scale();
+        let gpu_scene = GpuScene::upload(device, scene)?;
+        let batch =
+            sensor_maps::batch_size(device, kind, rd, memory_budget.unwrap_or_else(|| default_memory_budget(device)))?;
+        let maps = SensorMapPass::new(device, &gpu_scene, kind, rd, batch, frame::NEAR * scale)?;
+        Ok(Self {
+            reduce: ReducePass::new(device, kind, rd, batch)?,
+            interpolate: InterpolatePass::new(device)?,
+            filter: FilterPass::new(device)?,
+            compose: ComposePass::new(device)?,
+            gbuffer: GBufferPass::new(device, &gpu_scene)?,
+            maps,
+            scene: gpu_scene,
+            device: device.clone(),
+            kind,
+            rd,
+            scale,
+        })
+    }
+
+    pub fn batch_size(&self) -> u32 {
+        self.maps.batch()
+    }
+
+    /// Renders `scene` (the one this renderer was made for) at `size`.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        size: ImageSize,
+        params: &RenderParams,
+        progress: &dyn Progress,
+    ) -> Result<RenderOutput> {
+        let start = Instant::now();
+        let device = self.device.clone();
+        let mut gpu_other = Duration::ZERO;
+        let e = &params.estimator;
+
+        let t = Instant::now();
+        let near = gbuffer::NEAR * self.scale;
+        let gpu_gbuffer = self.gbuffer.render(&device, &self.scene, &scene.camera, size, near)?;
+        let g = gpu_gbuffer.read_back(&device)?;
+        gpu_other += t.elapsed();
+
+        let pixels = size.width as u64 * size.height as u64;
+        let map_buffer = |name| {
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST;
+            Buffer::new(&device, name, pixels * 16, usage, MemoryLocation::GpuOnly)
+        };
+        let radiance = map_buffer("radiance map")?;
+        let filtered = map_buffer("filtered radiance map")?;
+        let final_image = map_buffer("final image")?;
+        gpu_other += device.submit_and_wait(|cmd| {
+            // SAFETY: recording state; the buffer outlives the wait.
+            unsafe { device.raw.cmd_fill_buffer(cmd, radiance.raw, 0, vk::WHOLE_SIZE, 0) };
+            Ok(())
+        })?;
+        self.reduce.bind(&device, self.maps.maps(), &radiance);
+
+        // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G).
+        let (mut refinement, mut pending) = Refinement::start(&g, params.tile, params.dradiance);
+        let mut r: Vec<Vec4> = Vec::new();
+        let mut sensor_time = Duration::ZERO;
+        let (mut sensors, mut batches, mut per_round) = (0u64, 0u64, Vec::new());
+        loop {
+            if !pending.is_empty() {
+                progress.queued(pending.len() as u64);
+                let (time, n) = self.sense(&g, &pending, e.epsilon, e.background, progress)?;
+                sensor_time += time;
+                batches += n;
+                sensors += pending.len() as u64;
+                per_round.push(pending.len() as u64);
+                let t = Instant::now();
+                r = transfer::read_buffer::<Vec4>(&device, &radiance, pixels as usize)?;
+                gpu_other += t.elapsed();
+            }
+            if refinement.is_finished() {
+                break;
+            }
+            pending = refinement.step(&r);
+        }
+
+        // Interpolation, filter, composition: one submission.
+        let t = Instant::now();
+        self.interpolate.bind(&device, refinement.interpolated(), &radiance)?;
+        self.filter.bind(&device, &radiance, &filtered, &gpu_gbuffer.surface);
+        self.compose.bind(&device, &filtered, &final_image, &gpu_gbuffer);
+        device.submit_and_wait(|cmd| {
+            barrier::compute_to_compute(&device, cmd);
+            self.interpolate.record(&device, cmd, size);
+            barrier::compute_to_compute(&device, cmd);
+            self.filter.record(&device, cmd, size, params.filter_radius);
+            barrier::compute_to_compute(&device, cmd);
+            self.compose.record(&device, cmd, size);
+            Ok(())
+        })?;
+        let image = transfer::read_buffer::<Vec4>(&device, &final_image, pixels as usize)?;
+        let radiance = transfer::read_buffer::<Vec4>(&device, &filtered, pixels as usize)?;
+        gpu_other += t.elapsed();
+
+        let total = start.elapsed();
+        let stats = RenderStats {
+            device: device.adapter.name.clone(),
+            driver: device.adapter.driver.clone(),
+            sensor: self.kind.to_string(),
+            sensor_size: self.rd,
+            width: size.width,
+            height: size.height,
+            tile: params.tile,
+            dradiance: params.dradiance,
+            epsilon: e.epsilon,
+            filter_radius: params.filter_radius,
+            sensors,
+            sensors_per_round: per_round,
+            interpolated_quads: refinement.interpolated().len() as u64,
+            batch_size: self.maps.batch(),
+            batches,
+            total_seconds: total.as_secs_f64(),
+            gpu_sensor_seconds: sensor_time.as_secs_f64(),
+            gpu_other_seconds: gpu_other.as_secs_f64(),
+            host_seconds: (total.saturating_sub(sensor_time + gpu_other)).as_secs_f64(),
+            sensor_time_ms: if sensors > 0 { 1e3 * total.as_secs_f64() / sensors as f64 } else { 0.0 },
+        };
+        Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
+    }
+
+    /// Renders and reduces sensors at `pixels` (indices into the G-buffer `g`) into the bound radiance map.
+    /// Returns the time the GPU batches took (submission to completion) and the number of batches.
+    fn sense(
+        &mut self,
+        g: &GBufferData,
+        pixels: &[u32],
+        epsilon: f32,
+        background: Vec3,
+        progress: &dyn Progress,
+    ) -> Result<(Duration, u64)> {
+        let device = self.device.clone();
+        let bias = frame::BIAS * self.scale;
+        let mut time = Duration::ZERO;
+        let mut batches = 0;
+        for chunk in pixels.chunks(self.maps.batch() as usize) {
+            let frames: Vec<SensorFrame> = chunk
+                .iter()
+                .map(|&i| SensorFrame::new(g.position[i as usize].truncate(), g.normal[i as usize].truncate(), bias))
+                .collect();
+            self.maps.set_sensors(&frames)?;
+            self.reduce.set_pixels(chunk)?;
+            let count = chunk.len() as u32;
+            let (maps, reduce, scene) = (&mut self.maps, &self.reduce, &self.scene);
+            time += device.submit_and_wait(|cmd| {
+                maps.record(&device, cmd, scene, count, epsilon, background)?;
+                reduce.record(&device, cmd, count);
+                Ok(())
+            })?;
+            batches += 1;
+            progress.done(count as u64);
+        }
+        Ok((time, batches))
+    }
+}

@@ -1,0 +1,227 @@
+//! Sensor placement and adaptive refinement (paper §III-G, DESIGN.md §3 step 2).
+//!
+//! Sensors first go on a grid of step `dt` (plus the last row and column, so every pixel lies in a quad).
+//! Each quad of four sensed corners is then either interpolated, or split at its midpoints, whose new
+//! corners are sensed in the next round; quads of one pixel's width are done (all their pixels are corners):
+//!
+//! ```text
+//!   x0        xm        x1         a quad is interpolated when its corners and every pixel in it share
+//!   o---------+---------o  y0      one surface id, the corner normals agree, and the relative variation
+//!   |         |         |          of R between the corners is below dradiance; otherwise the points +
+//!   +---------+---------+  ym      are sensed and the four children are judged in the next round.
+//!   |         |         |
+//!   o---------+---------o  y1      o: sensed corners
+//! ```
+//!
+//! Ownership: a quad fills `[x0, x1) × [y0, y1)`, and also its right column / bottom row where that is the
+//! image's last one. Leaf quads therefore tile the image exactly and the fill is order-independent.
+
+use glam::{Vec3, Vec4};
+
+use crate::gpu_types::GpuQuad;
+use crate::passes::gbuffer::GBufferData;
+use crate::scene::{NO_SURFACE, SurfaceId};
+
+/// Corner normals agree when every pair is within this angle.
+pub const NORMAL_TOLERANCE_DEG: f32 = 10.0;
+
+/// The relative variation of R is measured against at least this fraction of the brightest R sensed on
+/// the first grid, so that black regions are not refined to the pixel on noise.
+pub const DARK_FLOOR: f32 = 1e-3;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Quad {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+/// The refinement state between rounds of sensing.
+pub struct Refinement {
+    width: u32,
+    height: u32,
+    dradiance: f32,
+    surface: Vec<SurfaceId>,
+    normal: Vec<Vec3>,
+    /// Pixels sensed or queued for sensing.
+    sensed: Vec<bool>,
+    active: Vec<Quad>,
+    interpolated: Vec<GpuQuad>,
+    floor: Option<f32>,
+    rounds: u32,
+}
+
+impl Refinement {
+    /// Starts a refinement over the G-buffer `g` with grid step `tile` (a power of two); returns it with the
+    /// first sensors to place: every grid pixel that shows a surface, row-major.
+    pub fn start(g: &GBufferData, tile: u32, dradiance: f32) -> (Self, Vec<u32>) {
+        let (w, h) = (g.size.width, g.size.height);
+        let grid = |n: u32| -> Vec<u32> {
+            let mut v: Vec<u32> = (0..n).step_by(tile as usize).collect();
+            if *v.last().unwrap() != n - 1 {
+                v.push(n - 1);
+            }
+            v
+        };
+        let (xs, ys) = (grid(w), grid(h));
+        let mut active = Vec::new();
+        for y in ys.windows(2).map(|p| (p[0], p[1])).chain((ys.len() == 1).then_some((0, 0))) {
+            for x in xs.windows(2).map(|p| (p[0], p[1])).chain((xs.len() == 1).then_some((0, 0))) {
+                active.push(Quad { x0: x.0, y0: y.0, x1: x.1, y1: y.1 });
+            }
+        }
+        let mut r = Self {
+            width: w,
+            height: h,
+            dradiance,
+            surface: g.surface.clone(),
+            normal: g.normal.iter().map(|n| n.truncate()).collect(),
+            sensed: vec![false; (w * h) as usize],
+            active,
+            interpolated: Vec::new(),
+            floor: None,
+            rounds: 0,
+        };
+        let mut first = Vec::new();
+        for &y in &ys {
+            for &x in &xs {
+                r.queue(x, y, &mut first);
+            }
+        }
+        (r, first)
+    }
+
+    fn index(&self, x: u32, y: u32) -> usize {
+        (y * self.width + x) as usize
+    }
+
+    /// Queues pixel (x, y) for sensing if it shows a surface and is not sensed yet.
+    fn queue(&mut self, x: u32, y: u32, out: &mut Vec<u32>) {
+        let i = self.index(x, y);
+        if !self.sensed[i] && self.surface[i] != NO_SURFACE {
+            self.sensed[i] = true;
+            out.push(i as u32);
+        }
+    }
+
+    /// Judges every active quad with the radiance map `r` (all queued sensors done); returns the next
+    /// sensors to place, empty when the refinement is finished.
+    pub fn step(&mut self, r: &[Vec4]) -> Vec<u32> {
+        self.rounds += 1;
+        let floor = *self.floor.get_or_insert_with(|| {
+            let brightest = self
+                .sensed
+                .iter()
+                .zip(r)
+                .filter(|(s, _)| **s)
+                .map(|(_, v)| v.truncate().max_element())
+                .fold(0.0, f32::max);
+            DARK_FLOOR * brightest
+        });
+        let mut next_quads = Vec::new();
+        let mut next_sensors = Vec::new();
+        for q in std::mem::take(&mut self.active) {
+            if self.can_interpolate(q, r, floor) {
+                self.interpolated.push(self.owned(q));
+                continue;
+            }
+            if q.x1 - q.x0 <= 1 && q.y1 - q.y0 <= 1 {
+                continue; // every pixel is a corner: sensed
+            }
+            let xs = split(q.x0, q.x1);
+            let ys = split(q.y0, q.y1);
+            for y in ys.windows(2) {
+                for x in xs.windows(2) {
+                    next_quads.push(Quad { x0: x[0], y0: y[0], x1: x[1], y1: y[1] });
+                }
+            }
+            for &y in &ys {
+                for &x in &xs {
+                    self.queue(x, y, &mut next_sensors);
+                }
+            }
+        }
+        self.active = next_quads;
+        next_sensors
+    }
+
+    fn can_interpolate(&self, q: Quad, r: &[Vec4], floor: f32) -> bool {
+        let corners = [self.index(q.x0, q.y0), self.index(q.x1, q.y0), self.index(q.x0, q.y1), self.index(q.x1, q.y1)];
+        let id = self.surface[corners[0]];
+        if id == NO_SURFACE || corners.iter().any(|&c| self.surface[c] != id) {
+            return false;
+        }
+        let cos_tolerance = NORMAL_TOLERANCE_DEG.to_radians().cos();
+        for a in 0..4 {
+            for b in a + 1..4 {
+                if self.normal[corners[a]].dot(self.normal[corners[b]]) < cos_tolerance {
+                    return false;
+                }
+            }
+        }
+        let values: Vec<Vec3> = corners.iter().map(|&c| r[c].truncate()).collect();
+        let max = values.iter().fold(Vec3::splat(f32::MIN), |m, v| m.max(*v));
+        let min = values.iter().fold(Vec3::splat(f32::MAX), |m, v| m.min(*v));
+        let variation = (max - min).max_element() / max.max_element().max(floor).max(f32::MIN_POSITIVE);
+        if variation >= self.dradiance {
+            return false;
+        }
+        (q.y0..=q.y1).all(|y| (q.x0..=q.x1).all(|x| self.surface[self.index(x, y)] == id))
+    }
+
+    /// The quad with its share of the image: its right column and bottom row belong to the next quad,
+    /// except on the image's last column and row.
+    fn owned(&self, q: Quad) -> GpuQuad {
+        let own_x1 = if q.x1 == self.width - 1 { q.x1 } else { q.x1 - 1 };
+        let own_y1 = if q.y1 == self.height - 1 { q.y1 } else { q.y1 - 1 };
+        GpuQuad { x0: q.x0, y0: q.y0, x1: q.x1, y1: q.y1, own_x1, own_y1, _pad: [0; 2] }
+    }
+
+    /// Quads to fill by interpolation, final once [`Refinement::step`] returned no sensors.
+    pub fn interpolated(&self) -> &[GpuQuad] {
+        &self.interpolated
+    }
+
+    /// No quad is left to judge.
+    pub fn is_finished(&self) -> bool {
+        self.active.is_empty()
+    }
+
+    /// Rounds of judging so far.
+    pub fn rounds(&self) -> u32 {
+        self.rounds
+    }
+
+    /// Whether pixel `i` was sensed.
+    pub fn is_sensed(&self, i: usize) -> bool {
+        self.sensed[i]
+    }
+}
+
+/// Corner coordinates after splitting `[a, b]` at its midpoint (unsplit when under two pixels wide).
+fn split(a: u32, b: u32) -> Vec<u32> {
+    if b - a > 1 { vec![a, (a + b) / 2, b] } else { vec![a, b] }
+}
+
+/// The CPU twin of `glsl/interpolate.comp`: fills each quad's own pixels that are not sensed.
+pub fn interpolate_cpu(radiance: &mut [Vec4], width: u32, quads: &[GpuQuad]) {
+    use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
+    for q in quads {
+        let at = |x: u32, y: u32| (y * width + x) as usize;
+        let (c00, c10) = (radiance[at(q.x0, q.y0)].truncate(), radiance[at(q.x1, q.y0)].truncate());
+        let (c01, c11) = (radiance[at(q.x0, q.y1)].truncate(), radiance[at(q.x1, q.y1)].truncate());
+        let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
+        for y in q.y0..=q.own_y1 {
+            for x in q.x0..=q.own_x1 {
+                let i = at(x, y);
+                if radiance[i].w == SENSED {
+                    continue;
+                }
+                let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
+                let r = c00.lerp(c10, fx).lerp(c01.lerp(c11, fx), fy);
+                radiance[i] = r.extend(INTERPOLATED);
+            }
+        }
+    }
+}

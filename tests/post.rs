@@ -1,0 +1,95 @@
+//! The GPU post-passes read back against their CPU twins: the id-constrained filter and the composition.
+
+mod common;
+
+use ash::vk;
+use glam::{Vec3, Vec4};
+use sensorlight::passes::filter::FilterPass;
+use sensorlight::reference::post;
+use sensorlight::reference::sampling::hash;
+use sensorlight::scene::ImageSize;
+use sensorlight::sensors::SensorKind;
+use sensorlight::vk::{Buffer, Image, ImageDesc, barrier, transfer};
+
+/// Runs the GPU filter over `source` with surface ids `ids`.
+fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec<Vec4> {
+    common::gpu(|device| {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let src = Buffer::upload(device, "source", source, usage).unwrap();
+        let dst = Buffer::upload(device, "target", &vec![Vec4::splat(-1.0); source.len()], usage).unwrap();
+        let desc = ImageDesc {
+            format: vk::Format::R32_UINT,
+            width: size.width,
+            height: size.height,
+            layers: 1,
+            usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
+            view_type: vk::ImageViewType::TYPE_2D,
+        };
+        let id_image = Image::new(device, "ids", desc).unwrap();
+        transfer::write_image(device, &id_image, ids).unwrap();
+        let pass = FilterPass::new(device).unwrap();
+        pass.bind(device, &src, &dst, &id_image);
+        device
+            .submit_and_wait(|cmd| {
+                barrier::memory(device, cmd, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::COMPUTE_SHADER);
+                pass.record(device, cmd, size, radius);
+                Ok(())
+            })
+            .unwrap();
+        transfer::read_buffer(device, &dst, source.len()).unwrap()
+    })
+}
+
+fn noise(i: u32, salt: u64) -> Vec4 {
+    let k = hash(i as u64 ^ salt);
+    Vec4::new((k & 0xffff) as f32, ((k >> 16) & 0xffff) as f32, ((k >> 32) & 0xffff) as f32, 65535.0) / 65535.0
+}
+
+#[test]
+fn gpu_filter_matches_the_cpu_twin() {
+    let size = ImageSize { width: 37, height: 23 };
+    let ids: Vec<u32> =
+        (0..37 * 23).map(|i| if i % 37 == 0 { 0 } else { 1 + (i % 37 > (i / 37) + 5) as u32 }).collect();
+    let source: Vec<Vec4> = (0..37 * 23).map(|i| noise(i, 1)).collect();
+    for radius in [1, 3] {
+        let expected = post::filter(&source, &ids, size, radius);
+        let got = gpu_filter(&source, &ids, size, radius);
+        for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
+            assert!((*a - *b).abs().max_element() < 2e-6, "radius {radius}, pixel {i}: GPU {a}, CPU {b}");
+        }
+        assert!(got != source, "radius {radius} changes the image");
+    }
+}
+
+#[test]
+fn filter_keeps_a_sharp_id_edge_exact_and_radius_zero_is_identity() {
+    let size = ImageSize { width: 30, height: 12 };
+    let ids: Vec<u32> = (0..30 * 12).map(|i| if i % 30 < 13 { 4 } else { 9 }).collect();
+    let source: Vec<Vec4> = ids
+        .iter()
+        .map(|&id| if id == 4 { Vec4::new(1.0, 2.0, 3.0, 1.0) } else { Vec4::new(0.0, 0.5, 0.0, 1.0) })
+        .collect();
+    // Mixing across the edge would move a pixel by O(1); renormalising identical values rounds at 1e-7.
+    for (i, (got, want)) in gpu_filter(&source, &ids, size, 4).iter().zip(&source).enumerate() {
+        assert!(
+            (*got - *want).abs().max_element() <= 1e-6 * want.max_element(),
+            "pixel {i}: {got} on a surface of {want}"
+        );
+    }
+    let textured: Vec<Vec4> = (0..30 * 12).map(|i| noise(i, 7)).collect();
+    let same = gpu_filter(&textured, &ids, size, 0).iter().zip(&textured).all(|(a, b)| a == b);
+    assert!(same, "radius 0 is the identity");
+}
+
+#[test]
+fn gpu_composition_matches_the_cpu_twin() {
+    let scene = common::lightbox((24, 24));
+    let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.1);
+    params.filter_radius = 1;
+    let out = common::render(&scene, &params, None);
+    let expected = post::compose(&out.gbuffer, &out.radiance);
+    assert!(expected.iter().any(|p| p.truncate() != Vec3::ZERO));
+    for (i, (a, b)) in out.image.iter().zip(&expected).enumerate() {
+        assert!((*a - *b).abs().max_element() <= 1e-5 * b.max_element().max(1.0), "pixel {i}: GPU {a}, CPU {b}");
+    }
+}

@@ -1,0 +1,188 @@
+//! Sensor placement and adaptive refinement (paper §III-G), and the GPU interpolation that fills the quads.
+
+mod common;
+
+use glam::{Vec3, Vec4};
+use sensorlight::gpu_types::GpuQuad;
+use sensorlight::gpu_types::radiance_state::{INTERPOLATED, SENSED};
+use sensorlight::passes::gbuffer::GBufferData;
+use sensorlight::passes::interpolate::InterpolatePass;
+use sensorlight::reference::sampling::hash;
+use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
+use sensorlight::sensors::SensorKind;
+use sensorlight::sensors::refine::{Refinement, interpolate_cpu};
+use sensorlight::vk::{Buffer, barrier, transfer};
+
+/// A synthetic G-buffer: every pixel a surface (ids from `id`), all facing +z.
+fn gbuffer(width: u32, height: u32, id: impl Fn(u32, u32) -> u32) -> GBufferData {
+    let n = (width * height) as usize;
+    let surface: Vec<u32> = (0..n as u32).map(|i| id(i % width, i / width)).collect();
+    GBufferData {
+        size: ImageSize { width, height },
+        position: surface.iter().map(|&s| Vec4::new(0.0, 0.0, 0.0, if s == NO_SURFACE { 0.0 } else { 1.0 })).collect(),
+        normal: vec![Vec4::new(0.0, 0.0, 1.0, 1.0); n],
+        albedo: vec![Vec4::ONE; n],
+        emission: vec![Vec4::ZERO; n],
+        surface,
+    }
+}
+
+/// Runs the refinement with "sensing" that returns `r(x, y)`; returns the sensed mask and the quads.
+fn refine(g: &GBufferData, tile: u32, dradiance: f32, r: impl Fn(u32, u32) -> f32) -> (Vec<bool>, Vec<GpuQuad>) {
+    let w = g.size.width;
+    let mut radiance = vec![Vec4::ZERO; g.surface.len()];
+    let (mut refinement, mut pending) = Refinement::start(g, tile, dradiance);
+    loop {
+        for &i in &pending {
+            radiance[i as usize] = Vec3::splat(r(i % w, i / w)).extend(SENSED);
+        }
+        if refinement.is_finished() {
+            break;
+        }
+        pending = refinement.step(&radiance);
+    }
+    let sensed = (0..g.surface.len()).map(|i| refinement.is_sensed(i)).collect();
+    (sensed, refinement.interpolated().to_vec())
+}
+
+#[test]
+fn dradiance_zero_senses_every_surface_pixel() {
+    let g = gbuffer(37, 21, |x, y| if (x + y) % 11 == 0 { NO_SURFACE } else { 1 });
+    let (sensed, quads) = refine(&g, 8, 0.0, |_, _| 0.5);
+    for (i, &s) in sensed.iter().enumerate() {
+        assert_eq!(s, g.surface[i] != NO_SURFACE, "pixel {i}");
+    }
+    assert!(quads.is_empty() || quads.iter().all(|q| q.x1 - q.x0 <= 1 && q.y1 - q.y0 <= 1));
+}
+
+#[test]
+fn huge_dradiance_on_one_surface_senses_only_the_grid() {
+    let g = gbuffer(37, 21, |_, _| 1);
+    let (sensed, quads) = refine(&g, 8, 1e30, |x, y| (x * 7 + y * 3) as f32);
+    let on_grid = |v: u32, n: u32| v.is_multiple_of(8) || v == n - 1;
+    for (i, &s) in sensed.iter().enumerate() {
+        let (x, y) = (i as u32 % 37, i as u32 / 37);
+        assert_eq!(s, on_grid(x, 37) && on_grid(y, 21), "pixel ({x}, {y})");
+    }
+    // The quads tile the image exactly: every pixel is owned by one quad.
+    let mut owners = vec![0; 37 * 21];
+    for q in &quads {
+        for y in q.y0..=q.own_y1 {
+            for x in q.x0..=q.own_x1 {
+                owners[(y * 37 + x) as usize] += 1;
+            }
+        }
+    }
+    assert!(owners.iter().all(|&o| o == 1), "quads overlap or leave gaps");
+}
+
+#[test]
+fn no_quad_is_interpolated_across_a_surface_boundary() {
+    // A diagonal boundary, a small island that falls between grid points, and background.
+    let id = |x: u32, y: u32| {
+        if (20..23).contains(&x) && (5..7).contains(&y) {
+            3
+        } else if x > 2 * y + 3 {
+            1
+        } else if x == 0 {
+            NO_SURFACE
+        } else {
+            2
+        }
+    };
+    let g = gbuffer(48, 24, id);
+    let (sensed, quads) = refine(&g, 16, 1e30, |_, _| 1.0);
+    assert!(!quads.is_empty());
+    for q in &quads {
+        let first = id(q.x0, q.y0);
+        for y in q.y0..=q.y1 {
+            for x in q.x0..=q.x1 {
+                assert_eq!(id(x, y), first, "quad {q:?} spans surfaces");
+            }
+        }
+    }
+    // The island was found although no grid point lies on it.
+    assert!((20..23).any(|x| (5..7).any(|y| sensed[(y * 48 + x) as usize])));
+}
+
+#[test]
+fn variation_decides_between_interpolating_and_splitting() {
+    // R jumps across x = 20: quads straddling it split, quads away from it interpolate.
+    let g = gbuffer(65, 17, |_, _| 1);
+    let (sensed, quads) = refine(&g, 16, 0.1, |x, _| if x < 20 { 1.0 } else { 2.0 });
+    assert!(quads.iter().any(|q| q.x1 <= 16 && q.x1 - q.x0 == 16), "the flat left quad is interpolated whole");
+    assert!(sensed[(8 * 65 + 19) as usize] || sensed[(8 * 65 + 20) as usize], "the jump is resolved to the pixel");
+    assert!(!quads.iter().any(|q| q.x0 < 20 && q.x1 >= 20 && q.x1 - q.x0 > 1), "no interpolation across the jump");
+}
+
+#[test]
+fn gpu_interpolation_matches_the_cpu_twin() {
+    let (w, h) = (45u32, 29u32);
+    let g = gbuffer(w, h, |x, y| 1 + (x / 20) + 2 * (y / 13));
+    let value = |x: u32, y: u32| {
+        let k = hash((y * w + x) as u64);
+        Vec3::new((k & 0xff) as f32, ((k >> 8) & 0xff) as f32, ((k >> 16) & 0xff) as f32) / 255.0
+    };
+    let (sensed, quads) = refine(&g, 8, 1e30, |_, _| 1.0);
+    let initial: Vec<Vec4> =
+        (0..w * h).map(|i| if sensed[i as usize] { value(i % w, i / w).extend(SENSED) } else { Vec4::ZERO }).collect();
+    let mut expected = initial.clone();
+    interpolate_cpu(&mut expected, w, &quads);
+    assert!(expected.iter().any(|r| r.w == INTERPOLATED));
+    let size = ImageSize { width: w, height: h };
+    let got = common::gpu(|device| {
+        let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+        let radiance = Buffer::upload(device, "radiance", &initial, usage).unwrap();
+        let mut pass = InterpolatePass::new(device).unwrap();
+        pass.bind(device, &quads, &radiance).unwrap();
+        device
+            .submit_and_wait(|cmd| {
+                barrier::compute_to_compute(device, cmd);
+                pass.record(device, cmd, size);
+                Ok(())
+            })
+            .unwrap();
+        transfer::read_buffer::<Vec4>(device, &radiance, (w * h) as usize).unwrap()
+    });
+    for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
+        assert_eq!(a.w, b.w, "state of pixel {i}");
+        assert!((*a - *b).abs().max_element() <= 1e-6, "pixel {i}: GPU {a}, CPU {b}");
+    }
+}
+
+/// End to end on the GPU: two coplanar surfaces meeting along a slanted line; even with a huge dradiance,
+/// every pixel next to the boundary is sensed, not interpolated.
+#[test]
+fn rendered_boundary_pixels_are_sensed() {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    // The plane z = 0 split along the line from (0.7, -2) to (-0.3, 2): `a` left of it, `b` right.
+    let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    let a = vec![[p(-2.0, -2.0), p(0.7, -2.0), p(-0.3, 2.0)], [p(-2.0, -2.0), p(-0.3, 2.0), p(-2.0, 2.0)]];
+    let b = vec![[p(0.7, -2.0), p(2.0, -2.0), p(2.0, 2.0)], [p(0.7, -2.0), p(2.0, 2.0), p(-0.3, 2.0)]];
+    let light = common::rect(Vec3::new(0.0, 0.0, 3.0), x, y, -z);
+    let camera = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, y, 60.0).unwrap();
+    let materials =
+        vec![common::material("a", 0.5, 0.0), common::material("b", 0.5, 0.0), common::material("lamp", 0.0, 1.0)];
+    let scene = common::scene(vec![("a", 0, a), ("b", 1, b), ("lamp", 2, light)], materials, camera, (40, 40));
+    let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.0);
+    params.tile = 8;
+    params.dradiance = 1e30;
+    let out = common::render(&scene, &params, None);
+    let ids = &out.gbuffer.surface;
+    let distinct: std::collections::BTreeSet<_> = ids.iter().collect();
+    assert_eq!(distinct.len(), 2, "both surfaces fill the view");
+    let (w, h) = (40i64, 40i64);
+    for i in 0..(w * h) {
+        let (px, py) = (i % w, i / w);
+        let next_to_boundary = (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                let (qx, qy) = (px + dx, py + dy);
+                qx >= 0 && qy >= 0 && qx < w && qy < h && ids[(qy * w + qx) as usize] != ids[i as usize]
+            })
+        });
+        if next_to_boundary {
+            assert_eq!(out.radiance[i as usize].w, SENSED, "pixel ({px}, {py}) beside the boundary");
+        }
+    }
+    assert!(out.stats.sensors < (w * h) as u64 / 2, "away from the boundary the grid is interpolated");
+}
