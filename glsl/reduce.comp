@@ -3,44 +3,58 @@
 // sensor's layers, with w the exact projected solid angle of each texel (src/sensors/weights.rs), and
 // writes it into the radiance map at the sensor's pixel with w = STATE_SENSED.
 //
-// Each thread first sums a strided share of the texels (a few hundred at rd 256), then the workgroup adds
-// the partial sums pairwise in shared memory: rounding error grows like log2(256) there, not like the
-// texel count.
+// The 8 x 8 threads walk each layer in 8 x 8 blocks (no integer division in the loop: CPU drivers
+// have no vector divide), each summing its share (3072 texels of a hemicube at rd 256); the workgroup then
+// adds the partial sums pairwise in shared memory, so rounding grows like log2(64) there, not like the
+// texel count. 64 threads, not 256: a CPU driver runs a workgroup's invocations as coroutines that all
+// switch at every barrier, and with 256 the barriers cost more than the sums (docs/BENCHMARKS.md); a GPU
+// still has hundreds of sensors' workgroups in flight.
 #include "types.glsl"
 
-layout(local_size_x = 256) in;
+layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0, rgba16f) uniform readonly image2DArray sensor_maps;
+layout(set = 0, binding = 0, rgba16f) uniform readonly image2DArray sensor_maps;  // layers, or 1 atlas layer
 layout(std430, set = 0, binding = 1) readonly buffer Weights { float weights[]; };  // [layer][row][col]
 layout(std430, set = 0, binding = 2) readonly buffer Pixels { uint pixels[]; };    // pixel of each sensor
 layout(std430, set = 0, binding = 3) buffer Radiance { vec4 radiance[]; };         // the radiance map
 layout(push_constant) uniform Push { ReducePush push; };
 
-shared vec3 partial[256];
+shared vec3 partial[64];
 
 void main() {
-    uint sensor = gl_WorkGroupID.x;
-    uint lid = gl_LocalInvocationID.x;
-    uint texels_per_layer = push.rd * push.rd;
-    uint texels = texels_per_layer * push.layers;
-    int first_layer = int(sensor * push.layers);
+    uint sensor = push.first_sensor + gl_WorkGroupID.x;
+    uint lid = gl_LocalInvocationIndex;
+    uvec2 thread = gl_LocalInvocationID.xy;
+    uint rd = push.rd;
 
     vec3 sum = vec3(0.0);
-    for (uint t = lid; t < texels; t += 256u) {
-        uint layer = t / texels_per_layer;
-        uint texel = t - layer * texels_per_layer;
-        ivec3 at = ivec3(int(texel % push.rd), int(texel / push.rd), first_layer + int(layer));
-        sum += imageLoad(sensor_maps, at).rgb * weights[t];
+    for (uint layer = 0u; layer < push.layers; layer++) {
+        // Where this layer's map is: an array layer, or a tile of the atlas.
+        uint slot = sensor * push.layers + layer;
+        ivec2 origin = ivec2(0);
+        int array_layer = int(slot);
+        if (push.atlas_columns != 0u) {
+            origin = ivec2(uvec2(slot % push.atlas_columns, slot / push.atlas_columns) * rd);
+            array_layer = 0;
+        }
+        uint weight_base = layer * rd * rd;
+        for (uint y = thread.y; y < rd; y += 8u) {
+            uint row = weight_base + y * rd;
+            for (uint x = thread.x; x < rd; x += 8u) {
+                vec3 ck = imageLoad(sensor_maps, ivec3(origin + ivec2(x, y), array_layer)).rgb;
+                sum += ck * weights[row + x];
+            }
+        }
     }
     partial[lid] = sum;
     barrier();
-    for (uint stride = 128u; stride > 0u; stride >>= 1u) {
+    for (uint stride = 32u; stride > 0u; stride >>= 1u) {
         if (lid < stride) {
             partial[lid] += partial[lid + stride];
         }
         barrier();
     }
     if (lid == 0u) {
-        radiance[pixels[push.first_sensor + sensor]] = vec4(partial[0] / PI, STATE_SENSED);
+        radiance[pixels[sensor]] = vec4(partial[0] / PI, STATE_SENSED);
     }
 }

@@ -21,16 +21,19 @@ struct GpuSensorView {
 };
 
 struct SensorPush {
-    float epsilon;     // non-emitters return Kd * epsilon (paper eq. 2)
-    uint first_view;   // first entry of the view buffer for this draw
-    uint _pad[2];
+    float epsilon;       // non-emitters return Kd * epsilon (paper eq. 2)
+    uint first_view;     // first entry of the view buffer for this draw (multiview)
+    uint layer_base;     // subtracted from a view's layer (layered strategies)
+    uint atlas_columns;  // tiles per row of the atlas (atlas strategy)
+    uint atlas_rows;
+    uint _pad[3];
 };
 
 struct ReducePush {
     uint rd;            // sensor map side
     uint layers;        // layers per sensor
-    uint first_sensor;  // index into the batch's pixel list of workgroup 0's sensor
-    uint _pad;
+    uint first_sensor;   // index into the batch's pixel list of workgroup 0's sensor
+    uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
 };
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).

@@ -52,9 +52,14 @@ pub struct GpuSensorView {
 pub struct SensorPush {
     /// `Kd·ε` is what a non-emitting surface returns (paper eq. 2).
     pub epsilon: f32,
-    /// First entry of the view buffer this draw reads.
+    /// First entry of the view buffer this draw reads (multiview: view of `gl_ViewIndex` 0).
     pub first_view: u32,
-    pub _pad: [u32; 2],
+    /// Subtracted from a view's layer: the first layer of the framebuffer (layered strategies).
+    pub layer_base: u32,
+    /// Tiles per row and rows of the atlas strategy (0 otherwise).
+    pub atlas_columns: u32,
+    pub atlas_rows: u32,
+    pub _pad: [u32; 3],
 }
 
 /// Push constants of the reduction: which sensors of the batch, and the map geometry.
@@ -67,7 +72,8 @@ pub struct ReducePush {
     pub layers: u32,
     /// Index into the batch's pixel list of workgroup 0's sensor.
     pub first_sensor: u32,
-    pub _pad: u32,
+    /// 0: sensor maps are layers of a 2D array. Otherwise tiles of one atlas with this many per row.
+    pub atlas_columns: u32,
 }
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).
@@ -119,6 +125,11 @@ pub fn surfaces(mesh: &Mesh) -> Vec<GpuSurface> {
 impl GpuSensorView {
     pub fn new(view_proj: Mat4, clip_plane: Option<Vec4>, layer: u32) -> Self {
         Self { view_proj, clip_plane: clip_plane.unwrap_or(Vec4::W), layer, _pad: [0; 3] }
+    }
+
+    /// A view that draws nothing (its clip plane rejects every point): fills unused multiview slots.
+    pub fn empty(layer: u32) -> Self {
+        Self { view_proj: Mat4::IDENTITY, clip_plane: -Vec4::W, layer, _pad: [0; 3] }
     }
 }
 

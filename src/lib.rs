@@ -6,11 +6,13 @@
 //! - [`gpu_types`] (+ `glsl/types.glsl`): the structs shared with shaders; [`gpu_scene`]: the scene on the GPU;
 //! - [`passes`]: the GPU passes, one per file, each beside its shaders in `glsl/`;
 //! - [`sensors`]: sensor frames, layer layouts and texel weights (shared by GPU and CPU);
-//! - [`renderer`]: one render end to end, the passes in order;
+//! - [`renderer`]: one render end to end, the passes in order; [`strategy`]: which sensor-map batching
+//!   strategy, self-checked and measured per device;
 //! - [`reference`]: the CPU ray-casting reference of the same estimator;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
 //! - [`output`]: EXR and PNG writing, always atomic.
 
+pub mod bench;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod output;
@@ -20,6 +22,7 @@ pub mod reference;
 pub mod renderer;
 pub mod scene;
 pub mod sensors;
+pub mod strategy;
 pub mod vk;
 
 /// SPIR-V of every shader in `glsl/`, compiled by build.rs: `glsl/gbuffer.vert` is `shaders::GBUFFER_VERT`.

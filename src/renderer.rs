@@ -12,13 +12,13 @@ use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
 use crate::gpu_scene::GpuScene;
-use crate::params::RenderParams;
+use crate::params::{EstimatorParams, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
-use crate::passes::gbuffer::{self, GBufferData, GBufferPass};
+use crate::passes::gbuffer::{self, GBuffer, GBufferData, GBufferPass};
 use crate::passes::interpolate::InterpolatePass;
 use crate::passes::reduce::ReducePass;
-use crate::passes::sensor_maps::{self, SensorMapPass};
+use crate::passes::sensor_maps::{self, SenseContext, Strategy, StrategyDesc, StrategyKind};
 use crate::scene::{ImageSize, Scene};
 use crate::sensors::SensorKind;
 use crate::sensors::frame::{self, SensorFrame};
@@ -40,7 +40,10 @@ impl Progress for Quiet {}
 /// The GPU state for rendering one scene with one kind and size of sensor, reusable across renders.
 pub struct Renderer {
     // Field order is drop order; all of these hold the device.
-    maps: SensorMapPass,
+    /// The images and buffers of the last render: the passes' descriptors refer to them, so they live
+    /// until the next render replaces them.
+    targets: Option<Targets>,
+    strategy: Box<dyn Strategy>,
     reduce: ReducePass,
     interpolate: InterpolatePass,
     filter: FilterPass,
@@ -59,6 +62,7 @@ pub struct RenderStats {
     pub device: String,
     pub driver: String,
     pub sensor: String,
+    pub strategy: StrategyKind,
     pub sensor_size: u32,
     pub width: u32,
     pub height: u32,
@@ -100,28 +104,31 @@ pub fn default_memory_budget(device: &Device) -> u64 {
 }
 
 impl Renderer {
-    /// `memory_budget`: bytes for one batch's sensor maps and depth (default [`default_memory_budget`]).
+    /// Sensors of `kind` and size `rd`, drawn by `strategy`; `memory_budget`: bytes for one batch's sensor
+    /// maps and depth (default [`default_memory_budget`]).
     pub fn new(
         device: &Arc<Device>,
         scene: &Scene,
         kind: SensorKind,
         rd: u32,
         memory_budget: Option<u64>,
+        strategy: StrategyKind,
     ) -> Result<Self> {
         let limits = &device.adapter.limits;
         kind.check_size(rd, limits.max_image_dimension_2d.min(limits.max_framebuffer_width))?;
         let scale = scene.mesh.scale();
         let gpu_scene = GpuScene::upload(device, scene)?;
-        let batch =
-            sensor_maps::batch_size(device, kind, rd, memory_budget.unwrap_or_else(|| default_memory_budget(device)))?;
-        let maps = SensorMapPass::new(device, &gpu_scene, kind, rd, batch, frame::NEAR * scale)?;
+        let budget = memory_budget.unwrap_or_else(|| default_memory_budget(device));
+        let desc = StrategyDesc { sensor: kind, rd, budget, near: frame::NEAR * scale };
+        let strategy = sensor_maps::create(strategy, device, &gpu_scene, desc)?;
         Ok(Self {
-            reduce: ReducePass::new(device, kind, rd, batch)?,
+            targets: None,
+            reduce: ReducePass::new(device, kind, rd, strategy.capacity())?,
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
             compose: ComposePass::new(device)?,
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
-            maps,
+            strategy,
             scene: gpu_scene,
             device: device.clone(),
             kind,
@@ -131,7 +138,67 @@ impl Renderer {
     }
 
     pub fn batch_size(&self) -> u32 {
-        self.maps.batch()
+        self.strategy.capacity()
+    }
+
+    pub fn strategy(&self) -> StrategyKind {
+        self.strategy.kind()
+    }
+
+    /// Renders the G-buffer of `scene` at `size`, makes this render's [`Targets`] (kept in `self.targets`)
+    /// and binds the zeroed radiance map to the reduction. Returns the G-buffer's host copy.
+    fn prepare(&mut self, scene: &Scene, size: ImageSize) -> Result<GBufferData> {
+        let device = self.device.clone();
+        let gpu_gbuffer = self.gbuffer.render(&device, &self.scene, &scene.camera, size, gbuffer::NEAR * self.scale)?;
+        let g = gpu_gbuffer.read_back(&device)?;
+        let targets = Targets {
+            radiance: map_buffer(&device, "radiance map", size)?,
+            filtered: map_buffer(&device, "filtered radiance map", size)?,
+            image: map_buffer(&device, "final image", size)?,
+            gbuffer: gpu_gbuffer,
+        };
+        let radiance = &targets.radiance;
+        device.submit_and_wait(|cmd| {
+            // SAFETY: recording state; the buffer outlives the wait.
+            unsafe { device.raw.cmd_fill_buffer(cmd, radiance.raw, 0, vk::WHOLE_SIZE, 0) };
+            Ok(())
+        })?;
+        let (maps, atlas_columns) = self.strategy.maps();
+        self.reduce.bind(&device, maps, atlas_columns, radiance);
+        self.targets = Some(targets);
+        Ok(g)
+    }
+
+    fn targets(&self) -> &Targets {
+        self.targets.as_ref().expect("prepare() ran")
+    }
+
+    /// R at `pixels` of `scene` seen at `size` (surface pixels only), and the host time sensing took (views,
+    /// submissions, waits): for the strategy self-check, strategy selection and benchmarks.
+    pub fn radiance_at(
+        &mut self,
+        scene: &Scene,
+        size: ImageSize,
+        pixels: &[u32],
+        estimator: &EstimatorParams,
+    ) -> Result<(Vec<Vec4>, Duration)> {
+        let g = self.prepare(scene, size)?;
+        let start = Instant::now();
+        self.sense(&g, pixels, estimator.epsilon, estimator.background, &Quiet)?;
+        let time = start.elapsed();
+        let r =
+            transfer::read_buffer::<Vec4>(&self.device, &self.targets().radiance, (size.width * size.height) as usize)?;
+        Ok((pixels.iter().map(|&i| r[i as usize]).collect(), time))
+    }
+
+    /// Runs the reduction alone over the last batch's first `count` sensors again (their maps are still in
+    /// place after [`Renderer::radiance_at`]); returns the time from submission to completion.
+    pub fn reduction_only(&self, count: u32) -> Result<Duration> {
+        let count = count.min(self.strategy.capacity());
+        self.device.submit_and_wait(|cmd| {
+            self.reduce.record(&self.device, cmd, 0, count);
+            Ok(())
+        })
     }
 
     /// Renders `scene` (the one this renderer was made for) at `size`.
@@ -148,27 +215,9 @@ impl Renderer {
         let e = &params.estimator;
 
         let t = Instant::now();
-        let near = gbuffer::NEAR * self.scale;
-        let gpu_gbuffer = self.gbuffer.render(&device, &self.scene, &scene.camera, size, near)?;
-        let g = gpu_gbuffer.read_back(&device)?;
-        gpu_other += t.elapsed();
-
+        let g = self.prepare(scene, size)?;
         let pixels = size.width as u64 * size.height as u64;
-        let map_buffer = |name| {
-            let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_SRC
-                | vk::BufferUsageFlags::TRANSFER_DST;
-            Buffer::new(&device, name, pixels * 16, usage, MemoryLocation::GpuOnly)
-        };
-        let radiance = map_buffer("radiance map")?;
-        let filtered = map_buffer("filtered radiance map")?;
-        let final_image = map_buffer("final image")?;
-        gpu_other += device.submit_and_wait(|cmd| {
-            // SAFETY: recording state; the buffer outlives the wait.
-            unsafe { device.raw.cmd_fill_buffer(cmd, radiance.raw, 0, vk::WHOLE_SIZE, 0) };
-            Ok(())
-        })?;
-        self.reduce.bind(&device, self.maps.maps(), &radiance);
+        gpu_other += t.elapsed();
 
         // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G).
         let (mut refinement, mut pending) = Refinement::start(&g, params.tile, params.dradiance);
@@ -184,7 +233,7 @@ impl Renderer {
                 sensors += pending.len() as u64;
                 per_round.push(pending.len() as u64);
                 let t = Instant::now();
-                r = transfer::read_buffer::<Vec4>(&device, &radiance, pixels as usize)?;
+                r = transfer::read_buffer::<Vec4>(&device, &self.targets().radiance, pixels as usize)?;
                 gpu_other += t.elapsed();
             }
             if refinement.is_finished() {
@@ -195,9 +244,10 @@ impl Renderer {
 
         // Interpolation, filter, composition: one submission.
         let t = Instant::now();
-        self.interpolate.bind(&device, refinement.interpolated(), &radiance)?;
-        self.filter.bind(&device, &radiance, &filtered, &gpu_gbuffer.surface);
-        self.compose.bind(&device, &filtered, &final_image, &gpu_gbuffer);
+        let targets = self.targets.as_ref().expect("prepare() ran");
+        self.interpolate.bind(&device, refinement.interpolated(), &targets.radiance)?;
+        self.filter.bind(&device, &targets.radiance, &targets.filtered, &targets.gbuffer.surface);
+        self.compose.bind(&device, &targets.filtered, &targets.image, &targets.gbuffer);
         device.submit_and_wait(|cmd| {
             barrier::compute_to_compute(&device, cmd);
             self.interpolate.record(&device, cmd, size);
@@ -207,8 +257,8 @@ impl Renderer {
             self.compose.record(&device, cmd, size);
             Ok(())
         })?;
-        let image = transfer::read_buffer::<Vec4>(&device, &final_image, pixels as usize)?;
-        let radiance = transfer::read_buffer::<Vec4>(&device, &filtered, pixels as usize)?;
+        let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels as usize)?;
+        let radiance = transfer::read_buffer::<Vec4>(&device, &targets.filtered, pixels as usize)?;
         gpu_other += t.elapsed();
 
         let total = start.elapsed();
@@ -216,6 +266,7 @@ impl Renderer {
             device: device.adapter.name.clone(),
             driver: device.adapter.driver.clone(),
             sensor: self.kind.to_string(),
+            strategy: self.strategy.kind(),
             sensor_size: self.rd,
             width: size.width,
             height: size.height,
@@ -226,7 +277,7 @@ impl Renderer {
             sensors,
             sensors_per_round: per_round,
             interpolated_quads: refinement.interpolated().len() as u64,
-            batch_size: self.maps.batch(),
+            batch_size: self.strategy.capacity(),
             batches,
             total_seconds: total.as_secs_f64(),
             gpu_sensor_seconds: sensor_time.as_secs_f64(),
@@ -247,27 +298,36 @@ impl Renderer {
         background: Vec3,
         progress: &dyn Progress,
     ) -> Result<(Duration, u64)> {
-        let device = self.device.clone();
         let bias = frame::BIAS * self.scale;
         let mut time = Duration::ZERO;
         let mut batches = 0;
-        for chunk in pixels.chunks(self.maps.batch() as usize) {
+        for chunk in pixels.chunks(self.strategy.capacity() as usize) {
             let frames: Vec<SensorFrame> = chunk
                 .iter()
                 .map(|&i| SensorFrame::new(g.position[i as usize].truncate(), g.normal[i as usize].truncate(), bias))
                 .collect();
-            self.maps.set_sensors(&frames)?;
             self.reduce.set_pixels(chunk)?;
-            let count = chunk.len() as u32;
-            let (maps, reduce, scene) = (&mut self.maps, &self.reduce, &self.scene);
-            time += device.submit_and_wait(|cmd| {
-                maps.record(&device, cmd, scene, count, epsilon, background)?;
-                reduce.record(&device, cmd, count);
-                Ok(())
-            })?;
+            let ctx =
+                SenseContext { device: &self.device, scene: &self.scene, reduce: &self.reduce, epsilon, background };
+            time += self.strategy.sense(&ctx, &frames)?;
             batches += 1;
-            progress.done(count as u64);
+            progress.done(chunk.len() as u64);
         }
         Ok((time, batches))
     }
+}
+
+/// What one render writes on the GPU.
+struct Targets {
+    radiance: Buffer,
+    filtered: Buffer,
+    image: Buffer,
+    gbuffer: GBuffer,
+}
+
+/// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.
+fn map_buffer(device: &Arc<Device>, name: &str, size: ImageSize) -> Result<Buffer> {
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(device, name, size.width as u64 * size.height as u64 * 16, usage, MemoryLocation::GpuOnly)
 }

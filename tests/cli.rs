@@ -44,14 +44,10 @@ fn render(scene: &str, name: &str, extra: &[&str]) -> std::path::PathBuf {
     let out = dir.join("out.exr");
     let mut args = vec!["render", scene, "-o", out.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_sensorlight"))
-        .args(&args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("SENSORLIGHT_VALIDATION", "1")
-        .output()
-        .unwrap();
+    let run = common::sensorlight(&args);
     assert!(run.status.success(), "{}", common::stderr(&run));
     assert!(common::stderr(&run).contains("sensor time"), "prints its statistics");
+    assert!(common::stderr(&run).contains("strategy: "), "says which batching strategy it uses");
     dir
 }
 

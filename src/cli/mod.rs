@@ -1,6 +1,7 @@
 //! Sub-commands. Each parses its flags here and hands the library a scene and parameters.
 
 mod args;
+mod bench;
 mod compare;
 mod devices;
 mod reference;
@@ -12,7 +13,10 @@ use std::sync::Arc;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use sensorlight::passes::sensor_maps::StrategyKind;
 use sensorlight::scene::Scene;
+use sensorlight::sensors::SensorKind;
+use sensorlight::strategy;
 use sensorlight::vk::{Device, DeviceOptions};
 
 #[derive(Parser)]
@@ -34,6 +38,8 @@ enum Command {
     Reference(reference::ReferenceArgs),
     /// Compare an image with a reference image: relative RMSE, mean error and bias over lit pixels.
     Compare(compare::CompareArgs),
+    /// Benchmark the sensor batching strategies against each other and the raw fill rate.
+    Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
@@ -42,6 +48,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Render(args) => render::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }
 
@@ -78,4 +85,23 @@ fn progress_bar(total: u64, unit: &str) -> ProgressBar {
     let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");
     bar.set_style(ProgressStyle::with_template(&template).unwrap().progress_chars("=> "));
     bar
+}
+
+/// `auto` or a strategy name.
+fn parse_strategy(name: &str) -> Result<Option<StrategyKind>> {
+    if name == "auto" { Ok(None) } else { StrategyKind::parse(name).map(Some) }
+}
+
+/// Picks the sensor-map strategy (self-checked, cached) and says which and why.
+fn choose_strategy(
+    device: &Arc<Device>,
+    sensor: SensorKind,
+    rd: u32,
+    budget: u64,
+    requested: Option<StrategyKind>,
+) -> Result<StrategyKind> {
+    let mut cache = strategy::Cache::open_default();
+    let choice = strategy::choose(device, sensor, rd, budget, requested, &mut cache, &mut |line| eprintln!("{line}"))?;
+    eprintln!("strategy: {} ({})", choice.strategy, choice.reason);
+    Ok(choice.strategy)
 }

@@ -9,7 +9,7 @@ use indicatif::ProgressBar;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Overrides, RenderParams};
-use sensorlight::renderer::{Progress, RenderOutput, RenderStats, Renderer};
+use sensorlight::renderer::{Progress, RenderOutput, RenderStats, Renderer, default_memory_budget};
 use sensorlight::scene::Scene;
 
 use super::args::{EstimatorFlags, ImageFlags};
@@ -46,6 +46,10 @@ pub struct RenderArgs {
     /// Memory for one batch of sensor maps, MiB [default: 1/8 of the device's local memory]
     #[arg(long)]
     memory_budget: Option<u64>,
+    /// How sensors are batched: auto (the fastest that passes its self-check here), per-sensor, single-cb,
+    /// multiview, layered or atlas
+    #[arg(long, default_value = "auto")]
+    strategy: String,
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
@@ -81,9 +85,12 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     super::print_warnings(&scene);
     let params = RenderParams::resolve(&scene.render, &args.overrides())?;
     let size = args.image.size(&scene)?;
+    let requested = super::parse_strategy(&args.strategy)?;
     super::with_device(args.device, |device| {
-        let budget = args.memory_budget.map(|mib| mib << 20);
-        let mut renderer = Renderer::new(device, &scene, params.estimator.sensor, params.sensor_size, budget)?;
+        let budget = args.memory_budget.map(|mib| mib << 20).unwrap_or_else(|| default_memory_budget(device));
+        let (sensor, rd) = (params.estimator.sensor, params.sensor_size);
+        let strategy = super::choose_strategy(device, sensor, rd, budget, requested)?;
+        let mut renderer = Renderer::new(device, &scene, sensor, rd, Some(budget), strategy)?;
         let bar = Bar(super::progress_bar(0, "sensors"));
         let output = renderer.render(&scene, size, &params, &bar)?;
         bar.0.finish_and_clear();
@@ -95,10 +102,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
 fn print_stats(s: &RenderStats) {
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
     eprintln!(
-        "{} sensors ({}, rd {}) in {} batches of up to {}; per refinement round: {}; {} quads interpolated",
+        "{} sensors ({}, rd {}, {}) in {} batches of up to {}; per refinement round: {}; {} quads interpolated",
         s.sensors,
         s.sensor,
         s.sensor_size,
+        s.strategy,
         s.batches,
         s.batch_size,
         rounds.join(" + "),

@@ -3,4 +3,5 @@
 pub mod atomic;
 pub mod compare;
 pub mod exr;
+pub mod plot;
 pub mod png;

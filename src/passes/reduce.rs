@@ -20,6 +20,8 @@ pub struct ReducePass {
     pixels: Buffer,
     rd: u32,
     layers: u32,
+    /// Of the bound maps: 0 for array layers, else tiles per atlas row.
+    atlas_columns: u32,
 }
 
 impl ReducePass {
@@ -41,11 +43,13 @@ impl ReducePass {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        Ok(Self { kernel, weights, pixels, rd, layers: kind.layers() })
+        Ok(Self { kernel, weights, pixels, rd, layers: kind.layers(), atlas_columns: 0 })
     }
 
-    /// Binds the sensor maps to read and the radiance map to write (call while the GPU is idle).
-    pub fn bind(&self, device: &Device, maps: &Image, radiance: &Buffer) {
+    /// Binds the sensor maps to read (`atlas_columns` as [`crate::passes::sensor_maps::Strategy::maps`]
+    /// says) and the radiance map to write (call while the GPU is idle).
+    pub fn bind(&mut self, device: &Device, maps: &Image, atlas_columns: u32, radiance: &Buffer) {
+        self.atlas_columns = atlas_columns;
         self.kernel
             .writer()
             .storage_image(0, maps.view)
@@ -60,9 +64,10 @@ impl ReducePass {
         self.pixels.write(0, pixels)
     }
 
-    /// Records the reduction of the batch's first `count` sensors (layers `count × layers` of the maps).
-    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, count: u32) {
-        let push = ReducePush { rd: self.rd, layers: self.layers, first_sensor: 0, _pad: 0 };
+    /// Records the reduction of the batch's sensors `first..first + count`.
+    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, first: u32, count: u32) {
+        let push =
+            ReducePush { rd: self.rd, layers: self.layers, first_sensor: first, atlas_columns: self.atlas_columns };
         self.kernel.dispatch(device, cmd, &push, [count, 1, 1]);
     }
 }

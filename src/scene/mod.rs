@@ -1,6 +1,7 @@
 //! Scenes: triangles with materials and surface ids, a camera and an image size. Everything downstream (the
 //! GPU passes, the CPU reference) is handed a [`Scene`], never a parser.
 
+pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod obj;

@@ -133,7 +133,13 @@ impl Framebuffer {
 
     /// Begins `pass` on this framebuffer with the given clear values and sets the full viewport and scissor.
     pub fn begin(&self, cmd: vk::CommandBuffer, pass: &RenderPass, clears: &[vk::ClearValue]) {
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
+        self.begin_area(cmd, pass, clears, self.extent);
+    }
+
+    /// Like [`Framebuffer::begin`], but clears and draws only the top-left `area` (the viewport stays whole,
+    /// so clip space keeps mapping to the full framebuffer).
+    pub fn begin_area(&self, cmd: vk::CommandBuffer, pass: &RenderPass, clears: &[vk::ClearValue], area: vk::Extent2D) {
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: area };
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.raw)
             .framebuffer(self.raw)

@@ -28,13 +28,20 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// Runs the `sensorlight` binary with validation on.
-pub fn sensorlight(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sensorlight"))
-        .args(args)
+/// The `sensorlight` binary with validation on, run in the project root, its strategy cache kept apart
+/// from the user's.
+pub fn command() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_sensorlight"));
+    command
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env("SENSORLIGHT_VALIDATION", "1")
-        .output()
-        .expect("cannot run sensorlight")
+        .env("SENSORLIGHT_CACHE_DIR", Path::new(env!("CARGO_TARGET_TMPDIR")).join("strategy-cache"));
+    command
+}
+
+/// Runs the `sensorlight` binary (see [`command`]).
+pub fn sensorlight(args: &[&str]) -> Output {
+    command().args(args).output().expect("cannot run sensorlight")
 }
 
 pub fn stderr(output: &Output) -> String {
@@ -46,16 +53,9 @@ pub fn project(path: &str) -> PathBuf {
 }
 
 use glam::Vec3;
-use sensorlight::scene::obj::{Material, ObjGroup};
-use sensorlight::scene::{Camera, ImageSize, Mesh, RenderDefaults, Scene};
-
-/// An axis-aligned rectangle as two triangles, wound so that its front faces `facing`.
-pub fn rect(center: Vec3, half_u: Vec3, half_v: Vec3, facing: Vec3) -> Vec<[Vec3; 3]> {
-    let c = [center - half_u - half_v, center + half_u - half_v, center + half_u + half_v, center - half_u + half_v];
-    let flip = half_u.cross(half_v).dot(facing) < 0.0;
-    let tris = vec![[c[0], c[1], c[2]], [c[0], c[2], c[3]]];
-    if flip { tris.into_iter().map(|[a, b, c]| [a, c, b]).collect() } else { tris }
-}
+pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
+use sensorlight::scene::obj::Material;
+use sensorlight::scene::{Camera, ImageSize, Scene};
 
 pub fn material(name: &str, kd: f32, ke: f32) -> Material {
     Material { name: name.into(), kd: Vec3::splat(kd), ke: Vec3::splat(ke) }
@@ -68,19 +68,7 @@ pub fn scene(
     camera: Camera,
     size: (u32, u32),
 ) -> Scene {
-    let groups: Vec<ObjGroup> = groups
-        .into_iter()
-        .map(|(name, material, triangles)| ObjGroup { name: name.into(), material, triangles })
-        .collect();
-    let mut warnings = Vec::new();
-    Scene {
-        path: "(built in a test)".into(),
-        mesh: Mesh::new(&groups, materials, &mut warnings).unwrap(),
-        camera,
-        image: ImageSize { width: size.0, height: size.1 },
-        render: RenderDefaults::default(),
-        warnings,
-    }
+    sensorlight::scene::builtin::from_groups(groups, materials, camera, ImageSize { width: size.0, height: size.1 })
 }
 
 /// A closed cube of side 2 centred at the origin, every face emitting `ke` towards the inside, camera inside.
@@ -96,31 +84,9 @@ pub fn furnace(ke: f32) -> Scene {
     scene(vec![("box", 0, tris)], vec![material("glow", 0.5, ke)], camera, (24, 24))
 }
 
-/// A closed-back room (open towards the camera) with a large ceiling light and a block: an accuracy test
-/// scene whose light is large enough that the CPU reference converges quickly.
+/// The built-in lightbox (see `scene::builtin`) at `size`.
 pub fn lightbox(size: (u32, u32)) -> Scene {
-    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
-    let c = Vec3::new(0.0, 1.0, 0.0);
-    let mut groups = vec![
-        ("floor", 0, rect(Vec3::ZERO, x, z, y)),
-        ("ceiling", 0, rect(2.0 * y, x, z, -y)),
-        ("back", 0, rect(c - z, x, y, z)),
-        ("left", 1, rect(c - x, z, y, x)),
-        ("right", 2, rect(c + x, z, y, -x)),
-        ("light", 3, rect(1.99 * y, x * 0.5, z * 0.5, -y)),
-    ];
-    let (center, half) = (Vec3::new(0.3, 0.35, -0.2), Vec3::new(0.25, 0.35, 0.25));
-    for (n, u, v) in [(x, z, y), (-x, z, y), (z, x, y), (-z, x, y), (y, x, z)] {
-        groups.push(("block", 0, rect(center + n * half, u * half, v * half, n)));
-    }
-    let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), c, y, 40.0).unwrap();
-    let materials = vec![
-        Material { name: "white".into(), kd: Vec3::splat(0.7), ke: Vec3::ZERO },
-        Material { name: "red".into(), kd: Vec3::new(0.7, 0.1, 0.1), ke: Vec3::ZERO },
-        Material { name: "green".into(), kd: Vec3::new(0.1, 0.7, 0.1), ke: Vec3::ZERO },
-        Material { name: "light".into(), kd: Vec3::splat(0.5), ke: Vec3::splat(4.0) },
-    ];
-    scene(groups, materials, camera, size)
+    builtin_lightbox(ImageSize { width: size.0, height: size.1 })
 }
 
 /// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
@@ -146,9 +112,15 @@ pub fn render(
     budget: Option<u64>,
 ) -> sensorlight::renderer::RenderOutput {
     gpu(|device| {
-        let mut renderer =
-            sensorlight::renderer::Renderer::new(device, scene, params.estimator.sensor, params.sensor_size, budget)
-                .unwrap();
+        let mut renderer = sensorlight::renderer::Renderer::new(
+            device,
+            scene,
+            params.estimator.sensor,
+            params.sensor_size,
+            budget,
+            Default::default(),
+        )
+        .unwrap();
         renderer.render(scene, scene.image, params, &sensorlight::renderer::Quiet).unwrap()
     })
 }

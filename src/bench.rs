@@ -1,0 +1,219 @@
+//! The batching benchmark behind `sensorlight bench`: every strategy that passes its self-check renders
+//! the same sensors at each sensor-map size; runs are repeated and interleaved (strategy after strategy,
+//! then again) so that a machine's drift hits all alike, and speed is reported as medians with their spread
+//! and as ratios measured in the same run: against `per-sensor`, and against the device's raw fill rate
+//! (full-screen triangles into the same formats, `passes::fill`).
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use serde::Serialize;
+
+use crate::params::EstimatorParams;
+use crate::passes::fill::FillPass;
+use crate::passes::sensor_maps::{self, StrategyDesc, StrategyKind};
+use crate::renderer::{Renderer, default_memory_budget};
+use crate::scene::{ImageSize, Scene};
+use crate::strategy::{self, CheckResult, Probe};
+use crate::vk::Device;
+
+pub struct BenchConfig {
+    pub scene: Scene,
+    /// The view the sensors are picked from (surface pixels, spread evenly at random).
+    pub size: ImageSize,
+    pub estimator: EstimatorParams,
+    pub sizes: Vec<u32>,
+    pub strategies: Vec<StrategyKind>,
+    pub sensors: usize,
+    pub repeat: usize,
+}
+
+/// One strategy at one sensor size.
+#[derive(Clone, Debug, Serialize)]
+pub struct Measurement {
+    pub strategy: StrategyKind,
+    pub rd: u32,
+    /// Seconds per run of all the sensors, each repeat.
+    pub seconds: Vec<f64>,
+    pub median_seconds: f64,
+    pub sensors_per_second: f64,
+    /// Sensor-map texels (all layers) per second, reduction and host work included.
+    pub texels_per_second: f64,
+    /// Median speed relative to `per-sensor` at this size (when measured).
+    pub vs_per_sensor: Option<f64>,
+    /// Texel rate relative to the raw fill rate at this size.
+    pub vs_fill: f64,
+}
+
+/// What does not depend on the strategy, at one sensor size.
+#[derive(Clone, Debug, Serialize)]
+pub struct SizeSummary {
+    pub rd: u32,
+    /// Raw fill: texels per second (median).
+    pub fill_texels_per_second: f64,
+    /// The reduction alone, seconds per sensor (median).
+    pub reduction_seconds_per_sensor: f64,
+    /// The reduction's share of the fastest strategy's time per sensor.
+    pub reduction_share_of_best: f64,
+    pub best: StrategyKind,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub device: String,
+    pub driver: String,
+    pub scene: String,
+    pub triangles: usize,
+    pub sensor: String,
+    pub sensors: usize,
+    pub repeat: usize,
+    pub checks: Vec<(StrategyKind, CheckResult)>,
+    /// Strategies not measured, and why.
+    pub skipped: Vec<(StrategyKind, String)>,
+    pub measurements: Vec<Measurement>,
+    pub sizes: Vec<SizeSummary>,
+}
+
+fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// Runs the benchmark; `log` receives progress lines.
+pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(String)) -> Result<BenchReport> {
+    let sensor = config.estimator.sensor;
+    let budget = default_memory_budget(device);
+    let mut checks = Vec::new();
+    let mut skipped = Vec::new();
+    let mut strategies = Vec::new();
+    for &kind in &config.strategies {
+        let desc = StrategyDesc { sensor, rd: config.sizes.iter().copied().max().unwrap_or(32), budget, near: 0.0 };
+        if let Some(why) = sensor_maps::unsupported(kind, device, &desc) {
+            skipped.push((kind, format!("unsupported: {why}")));
+            continue;
+        }
+        let check = strategy::self_check(device, sensor, kind)?;
+        log(format!("self-check {kind}: max difference {:.2e}", check.max_difference));
+        checks.push((kind, check));
+        if check.passed {
+            strategies.push(kind);
+        } else {
+            skipped.push((
+                kind,
+                format!("fails the self-check (max difference {:.2e} of the brightest R)", check.max_difference),
+            ));
+        }
+    }
+
+    let probe = Probe::on(config.scene.clone(), config.size, config.sensors, config.estimator);
+    let n = probe.pixels.len();
+    let layers = sensor.layers() as u64;
+    let mut measurements = Vec::new();
+    let mut sizes = Vec::new();
+    for &rd in &config.sizes {
+        sensor.check_size(rd, device.adapter.limits.max_image_dimension_2d)?;
+        let mut renderers = strategies
+            .iter()
+            .map(|&kind| Renderer::new(device, &probe.scene, sensor, rd, Some(budget), kind))
+            .collect::<Result<Vec<_>>>()?;
+        let fill_layers = (n as u64 * layers).min(device.adapter.limits.max_framebuffer_layers as u64) as u32;
+        let fill = FillPass::new(device, rd, fill_layers)?;
+        // Warm-up: pipelines compile at first use.
+        for r in &mut renderers {
+            r.radiance_at(&probe.scene, probe.size, &probe.pixels, &config.estimator)?;
+        }
+        fill.run(device)?;
+        let mut times = vec![Vec::new(); renderers.len()];
+        let (mut fill_rates, mut reductions) = (Vec::new(), Vec::new());
+        for round in 0..config.repeat {
+            log(format!("rd {rd}: round {}/{}", round + 1, config.repeat));
+            for (i, r) in renderers.iter_mut().enumerate() {
+                let (_, t) = r.radiance_at(&probe.scene, probe.size, &probe.pixels, &config.estimator)?;
+                times[i].push(t.as_secs_f64());
+            }
+            let t = fill.run(device)?;
+            fill_rates.push(fill_layers as f64 * (rd as f64).powi(2) / t.as_secs_f64());
+            if let Some(r) = renderers.iter().find(|r| r.strategy() != StrategyKind::Atlas) {
+                let count = (n as u32).min(r.batch_size());
+                reductions.push(r.reduction_only(count)?.as_secs_f64() / count as f64);
+            }
+        }
+        let fill_rate = median(&fill_rates);
+        let texels_per_sensor = layers as f64 * (rd as f64).powi(2);
+        let per_sensor_median =
+            strategies.iter().position(|k| *k == StrategyKind::PerSensor).map(|i| median(&times[i]));
+        let first = measurements.len();
+        for (i, &kind) in strategies.iter().enumerate() {
+            let m = median(&times[i]);
+            let sensors_per_second = n as f64 / m;
+            measurements.push(Measurement {
+                strategy: kind,
+                rd,
+                seconds: times[i].clone(),
+                median_seconds: m,
+                sensors_per_second,
+                texels_per_second: sensors_per_second * texels_per_sensor,
+                vs_per_sensor: per_sensor_median.map(|p| p / m),
+                vs_fill: sensors_per_second * texels_per_sensor / fill_rate,
+            });
+        }
+        let best = measurements[first..].iter().min_by(|a, b| a.median_seconds.total_cmp(&b.median_seconds));
+        let reduction = if reductions.is_empty() { 0.0 } else { median(&reductions) };
+        if let Some(best) = best {
+            sizes.push(SizeSummary {
+                rd,
+                fill_texels_per_second: fill_rate,
+                reduction_seconds_per_sensor: reduction,
+                reduction_share_of_best: reduction / (best.median_seconds / n as f64),
+                best: best.strategy,
+            });
+        }
+        drop(renderers);
+    }
+    Ok(BenchReport {
+        device: device.adapter.name.clone(),
+        driver: device.adapter.driver.clone(),
+        scene: config.scene.path.display().to_string(),
+        triangles: config.scene.mesh.triangles.len(),
+        sensor: sensor.to_string(),
+        sensors: n,
+        repeat: config.repeat,
+        checks,
+        skipped,
+        measurements,
+        sizes,
+    })
+}
+
+impl BenchReport {
+    /// The measurements as CSV, one row per strategy and size.
+    pub fn csv(&self) -> String {
+        let mut out = String::from(
+            "device,driver,sensor,rd,strategy,sensors,repeat,median_seconds,min_seconds,max_seconds,sensors_per_second,texels_per_second,vs_per_sensor,vs_fill\n",
+        );
+        for m in &self.measurements {
+            let min = m.seconds.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = m.seconds.iter().copied().fold(0.0, f64::max);
+            out.push_str(&format!(
+                "\"{}\",\"{}\",{},{},{},{},{},{:.6},{:.6},{:.6},{:.1},{:.4e},{},{:.4}\n",
+                self.device,
+                self.driver,
+                self.sensor,
+                m.rd,
+                m.strategy,
+                self.sensors,
+                self.repeat,
+                m.median_seconds,
+                min,
+                max,
+                m.sensors_per_second,
+                m.texels_per_second,
+                m.vs_per_sensor.map(|v| format!("{v:.3}")).unwrap_or_default(),
+                m.vs_fill
+            ));
+        }
+        out
+    }
+}

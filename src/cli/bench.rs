@@ -1,0 +1,169 @@
+//! `sensorlight bench`: the sensor batching strategies against each other and against the raw fill rate.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Result, ensure};
+use clap::Args;
+use sensorlight::bench::{self, BenchConfig, BenchReport};
+use sensorlight::output::atomic;
+use sensorlight::output::plot::{Chart, Series};
+use sensorlight::params::EstimatorParams;
+use sensorlight::passes::sensor_maps::StrategyKind;
+use sensorlight::scene::{ImageSize, Scene, builtin};
+
+use super::args::EstimatorFlags;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scene to place the sensors in [default: the built-in lightbox]
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Sensor map sizes (rd), comma-separated
+    #[arg(long, value_delimiter = ',', default_value = "32,64,128,256")]
+    sizes: Vec<u32>,
+    /// Strategies to compare, comma-separated [default: all]
+    #[arg(long, value_delimiter = ',')]
+    strategies: Vec<String>,
+    /// Sensors per run
+    #[arg(long, default_value_t = 256)]
+    sensors: usize,
+    /// Timed runs per strategy and size (after one warm-up run), interleaved
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    #[command(flatten)]
+    estimator: EstimatorFlags,
+    /// Write the report as JSON
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the measurements as CSV
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Plot sensors per second against rd (SVG)
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Device index from `sensorlight devices` [default: the best available]
+    #[arg(long)]
+    device: Option<usize>,
+}
+
+pub fn run(args: BenchArgs) -> Result<ExitCode> {
+    ensure!(args.sensors >= 1 && args.repeat >= 1, "--sensors and --repeat must be at least 1");
+    ensure!(!args.sizes.is_empty(), "--sizes needs at least one size");
+    let strategies = if args.strategies.is_empty() {
+        StrategyKind::ALL.to_vec()
+    } else {
+        args.strategies.iter().map(|s| StrategyKind::parse(s)).collect::<Result<Vec<_>>>()?
+    };
+    let size = ImageSize { width: 128, height: 128 };
+    let scene = match &args.scene {
+        Some(path) => Scene::load(path)?,
+        None => builtin::lightbox(size),
+    };
+    super::print_warnings(&scene);
+    let estimator = EstimatorParams::resolve(&scene.render, &args.estimator.overrides())?;
+    let config = BenchConfig {
+        scene,
+        size,
+        estimator,
+        sizes: args.sizes.clone(),
+        strategies,
+        sensors: args.sensors,
+        repeat: args.repeat,
+    };
+    super::with_device(args.device, |device| {
+        let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
+        let report = bench::run(device, &config, &mut |line| {
+            if line.starts_with("rd ") {
+                bar.inc(1);
+            } else {
+                bar.println(&line);
+            }
+        })?;
+        bar.finish_and_clear();
+        print_report(&report);
+        if let Some(path) = &args.json {
+            atomic::write_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
+        }
+        if let Some(path) = &args.csv {
+            atomic::write_bytes(path, report.csv().as_bytes())?;
+        }
+        if let Some(path) = &args.plot {
+            plot(&report).write_svg(path)?;
+        }
+        Ok(())
+    })
+}
+
+fn print_report(r: &BenchReport) {
+    println!("device: {} ({})", r.device, r.driver);
+    println!(
+        "scene: {} ({} triangles); {} sensors, {} per run, {} timed runs each, interleaved; medians [min–max]",
+        r.scene, r.triangles, r.sensor, r.sensors, r.repeat
+    );
+    for (kind, why) in &r.skipped {
+        println!("not measured: {kind}: {why}");
+    }
+    println!("\n| rd | strategy | sensors/s [min–max] | Mtexel/s | vs per-sensor | vs raw fill |");
+    println!("|---:|---|---:|---:|---:|---:|");
+    for m in &r.measurements {
+        let n = r.sensors as f64;
+        let fastest = m.seconds.iter().copied().fold(f64::INFINITY, f64::min);
+        let slowest = m.seconds.iter().copied().fold(0.0, f64::max);
+        println!(
+            "| {} | {} | {:.0} [{:.0}–{:.0}] | {:.1} | {} | {:.0} % |",
+            m.rd,
+            m.strategy,
+            m.sensors_per_second,
+            n / slowest,
+            n / fastest,
+            m.texels_per_second * 1e-6,
+            m.vs_per_sensor.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
+            100.0 * m.vs_fill
+        );
+    }
+    println!("\n| rd | raw fill Mtexel/s | reduction alone, sensors/s | reduction share of the best | best |");
+    println!("|---:|---:|---:|---:|---|");
+    for s in &r.sizes {
+        println!(
+            "| {} | {:.1} | {:.0} | {:.0} % | {} |",
+            s.rd,
+            s.fill_texels_per_second * 1e-6,
+            1.0 / s.reduction_seconds_per_sensor,
+            100.0 * s.reduction_share_of_best,
+            s.best
+        );
+    }
+}
+
+fn plot(r: &BenchReport) -> Chart<'static> {
+    let mut series: Vec<Series> = Vec::new();
+    for m in &r.measurements {
+        match series.iter_mut().find(|s| s.name == m.strategy.name()) {
+            Some(s) => s.points.push((m.rd as f64, m.sensors_per_second)),
+            None => series.push(Series {
+                name: m.strategy.name().into(),
+                points: vec![(m.rd as f64, m.sensors_per_second)],
+                dashed: false,
+            }),
+        }
+    }
+    // The fill rate as the sensors per second it would allow.
+    let per_sensor_texels = |rd: u32| {
+        let layers = if r.sensor == "hemicube" { 3.0 } else { 1.0 };
+        layers * (rd as f64).powi(2)
+    };
+    series.push(Series {
+        name: "raw fill (bound)".into(),
+        points: r.sizes.iter().map(|s| (s.rd as f64, s.fill_texels_per_second / per_sensor_texels(s.rd))).collect(),
+        dashed: true,
+    });
+    Chart {
+        title: "Sensors per second by batching strategy",
+        x_label: "sensor map size rd (texels per side)",
+        y_label: "sensors / s",
+        log_x: true,
+        log_y: true,
+        series,
+    }
+}

@@ -1,0 +1,119 @@
+//! Line charts for benchmarks and the paper's figures, as SVG (text stays text: no fonts needed).
+
+use std::path::Path;
+
+use anyhow::{Result, anyhow};
+use plotters::prelude::*;
+
+use super::atomic;
+
+/// One line: a name for the legend, its points, and whether it is drawn dashed (a bound, not a measurement).
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+    pub dashed: bool,
+}
+
+pub struct Chart<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    /// Logarithmic axes (base 2 on x, base 10 on y).
+    pub log_x: bool,
+    pub log_y: bool,
+    pub series: Vec<Series>,
+}
+
+const COLORS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+impl Chart<'_> {
+    /// The chart as an SVG document.
+    pub fn svg(&self) -> Result<String> {
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (800, 500)).into_drawing_area();
+            self.draw(&root)?;
+            root.present().map_err(|e| anyhow!("plot: {e}"))?;
+        }
+        Ok(svg)
+    }
+
+    pub fn write_svg(&self, path: &Path) -> Result<()> {
+        atomic::write_bytes(path, self.svg()?.as_bytes())
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e:?}");
+        root.fill(&WHITE).map_err(err)?;
+        let points = self.series.iter().flat_map(|s| s.points.iter());
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for &(x, y) in points {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+        if x0 > x1 {
+            return Err(anyhow!("plot '{}': no points", self.title));
+        }
+        let pad = |lo: f64, hi: f64, log: bool| {
+            if log { (lo / 1.5, hi * 1.5) } else { (lo - 0.05 * (hi - lo).max(1e-9), hi + 0.05 * (hi - lo).max(1e-9)) }
+        };
+        let (x0, x1) = pad(x0, x1, self.log_x);
+        let (y0, y1) = pad(y0.min(if self.log_y { y0 } else { 0.0 }), y1, self.log_y);
+        let mut builder = ChartBuilder::on(root);
+        builder.caption(self.title, ("sans-serif", 22)).margin(15).x_label_area_size(45).y_label_area_size(70);
+        macro_rules! finish {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(self.x_label)
+                    .y_desc(self.y_label)
+                    .label_style(("sans-serif", 14))
+                    .draw()
+                    .map_err(err)?;
+                for (i, s) in self.series.iter().enumerate() {
+                    let color = COLORS[i % COLORS.len()];
+                    let style = ShapeStyle { color: color.to_rgba(), filled: false, stroke_width: 2 };
+                    let drawn = if s.dashed {
+                        chart.draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style)).map_err(err)?
+                    } else {
+                        chart.draw_series(LineSeries::new(s.points.iter().copied(), style)).map_err(err)?
+                    };
+                    drawn
+                        .label(s.name.clone())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                    if !s.dashed {
+                        chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(err)?;
+                    }
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(err)?;
+            }};
+        }
+        match (self.log_x, self.log_y) {
+            (true, true) => {
+                finish!(builder.build_cartesian_2d((x0..x1).log_scale().base(2.0), (y0..y1).log_scale()).map_err(err)?)
+            }
+            (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale().base(2.0), y0..y1).map_err(err)?),
+            (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale()).map_err(err)?),
+            (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?),
+        }
+        Ok(())
+    }
+}
