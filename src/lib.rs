@@ -15,6 +15,7 @@
 pub mod bench;
 pub mod gpu_scene;
 pub mod gpu_types;
+pub mod metrics;
 pub mod output;
 pub mod params;
 pub mod passes;

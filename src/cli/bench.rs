@@ -77,7 +77,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             if line.starts_with("rd ") {
                 bar.inc(1);
             } else {
-                bar.println(&line);
+                bar.suspend(|| eprintln!("{line}"));
             }
         })?;
         bar.finish_and_clear();

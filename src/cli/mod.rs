@@ -4,6 +4,7 @@ mod args;
 mod bench;
 mod compare;
 mod devices;
+mod metrics;
 mod reference;
 mod render;
 
@@ -40,6 +41,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Benchmark the sensor batching strategies against each other and the raw fill rate.
     Bench(bench::BenchArgs),
+    /// Reproduce the paper's metrics (Table I, Fig. 10, Fig. 11) on this device.
+    Metrics(metrics::MetricsArgs),
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
@@ -49,6 +52,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Metrics(args) => metrics::run(args),
     }
 }
 

@@ -1,4 +1,5 @@
-//! Line charts for benchmarks and the paper's figures, as SVG (text stays text: no fonts needed).
+//! Line charts for benchmarks and the paper's figures: SVG (text stays text) and PNG (text rasterised with
+//! the embedded DejaVu Sans, so no system font is needed).
 
 use std::path::Path;
 
@@ -22,6 +23,16 @@ pub struct Chart<'a> {
     pub log_x: bool,
     pub log_y: bool,
     pub series: Vec<Series>,
+}
+
+/// Makes the embedded DejaVu Sans plotters' "sans-serif" (once).
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let font: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+        // The font is known to parse; a failure would surface as FontUnavailable when drawing.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, font);
+    });
 }
 
 const COLORS: [RGBColor; 8] = [
@@ -51,10 +62,32 @@ impl Chart<'_> {
         atomic::write_bytes(path, self.svg()?.as_bytes())
     }
 
+    /// The chart as an 8-bit RGB PNG.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let (w, h) = (1000u32, 625u32);
+        let mut rgb = vec![0u8; (w * h * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+            self.draw(&root)?;
+            root.present().map_err(|e| anyhow!("plot: {e}"))?;
+        }
+        atomic::write_file(path, |out| {
+            let mut encoder = png::Encoder::new(out, w, h);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            let mut writer = encoder.write_header()?;
+            writer.write_image_data(&rgb)?;
+            writer.finish()?;
+            Ok(())
+        })
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
     {
+        // Both backends lay text out with the registered font.
+        register_font();
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("plot: {e:?}");
         root.fill(&WHITE).map_err(err)?;
         let points = self.series.iter().flat_map(|s| s.points.iter());
@@ -75,8 +108,13 @@ impl Chart<'_> {
         macro_rules! finish {
             ($chart:expr) => {{
                 let mut chart = $chart;
+                // Integers on a log-2 axis (16, 32, …), three significant digits otherwise.
+                let integer = |v: &f64| format!("{v:.0}");
+                let general = |v: &f64| format!("{v}");
+                let x_format: &dyn Fn(&f64) -> String = if self.log_x { &integer } else { &general };
                 chart
                     .configure_mesh()
+                    .x_label_formatter(x_format)
                     .x_desc(self.x_label)
                     .y_desc(self.y_label)
                     .label_style(("sans-serif", 14))

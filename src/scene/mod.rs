@@ -100,7 +100,7 @@ impl Mesh {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct ImageSize {
     pub width: u32,
     pub height: u32,

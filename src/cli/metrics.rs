@@ -1,0 +1,165 @@
+//! `sensorlight metrics`: the paper's Table I, Fig. 10 and Fig. 11 on this device.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result, bail, ensure};
+use clap::Args;
+use indicatif::ProgressBar;
+use sensorlight::metrics::{self, MetricsConfig, report};
+use sensorlight::params::{Overrides, RenderParams};
+use sensorlight::renderer::Progress;
+use sensorlight::scene::{ImageSize, Scene};
+use sensorlight::strategy::Cache;
+
+use super::args::EstimatorFlags;
+
+#[derive(Args)]
+pub struct MetricsArgs {
+    /// Output directory (created if needed): CSV, Markdown, SVG and PNG per experiment, and metrics.json
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Table I: sensor time against screen resolution (all three when none of these is given)
+    #[arg(long)]
+    table1: bool,
+    /// Fig. 10: sensor time against sensor map size
+    #[arg(long)]
+    fig10: bool,
+    /// Fig. 11: number of sensors against sensor map size (from the same renders as Fig. 10)
+    #[arg(long)]
+    fig11: bool,
+    /// Scene file [default: scenes/cornell/cornell.toml]
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Sensor map size of Table I [default: 256, as the paper; 32 with --quick]
+    #[arg(long)]
+    sensor_size: Option<u32>,
+    /// Sensor map sizes of the figures, comma-separated [default: 16,32,64,128,256]
+    #[arg(long, value_delimiter = ',')]
+    sizes: Vec<u32>,
+    /// Screen resolutions of Table I, e.g. 200x200,300x200 [default: the paper's 13]
+    #[arg(long, value_delimiter = ',', value_parser = parse_resolution)]
+    resolutions: Vec<ImageSize>,
+    /// Screen resolutions of the figures [default: 320x240,640x480,1024x768]
+    #[arg(long, value_delimiter = ',', value_parser = parse_resolution)]
+    figure_resolutions: Vec<ImageSize>,
+    /// A reduced run (small resolutions and maps): a minute or two on a CPU driver
+    #[arg(long)]
+    quick: bool,
+    #[command(flatten)]
+    estimator: EstimatorFlags,
+    /// dt: initial sensor grid step [default: 16]
+    #[arg(long)]
+    tile: Option<u32>,
+    /// Refinement threshold [default: 0.2]
+    #[arg(long, allow_negative_numbers = true)]
+    dradiance: Option<f32>,
+    /// Id-constrained filter radius [default: 2]
+    #[arg(long)]
+    filter_radius: Option<u32>,
+    /// Batching strategy: auto or a name (see `render --help`)
+    #[arg(long, default_value = "auto")]
+    strategy: String,
+    /// Device index from `sensorlight devices` [default: the best available]
+    #[arg(long)]
+    device: Option<usize>,
+}
+
+fn parse_resolution(s: &str) -> Result<ImageSize, String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let (width, height) = (w.parse::<u32>(), h.parse::<u32>());
+    match (width, height) {
+        (Ok(width), Ok(height)) if width > 0 && height > 0 => Ok(ImageSize { width, height }),
+        _ => Err(format!("expected WIDTHxHEIGHT with positive integers, got '{s}'")),
+    }
+}
+
+/// Progress over sensors within the current run.
+struct RunBar(ProgressBar);
+
+impl Progress for RunBar {
+    fn queued(&self, n: u64) {
+        self.0.inc_length(n);
+    }
+    fn done(&self, n: u64) {
+        self.0.inc(n);
+    }
+}
+
+pub fn run(args: MetricsArgs) -> Result<ExitCode> {
+    let scene_path = args.scene.clone().unwrap_or_else(|| PathBuf::from("scenes/cornell/cornell.toml"));
+    if args.scene.is_none() && !scene_path.exists() {
+        bail!("no --scene given and {} is not here: run from the project root or pass --scene", scene_path.display());
+    }
+    let scene = Scene::load(&scene_path)?;
+    super::print_warnings(&scene);
+    // The paper's sensor unless the command line or the scene says otherwise.
+    let sensor = args.estimator.sensor.clone().or_else(|| scene.render.sensor.clone()).or(Some("frustum".into()));
+    let overrides = Overrides {
+        sensor,
+        sensor_size: args.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
+        tile: args.tile,
+        dradiance: args.dradiance,
+        filter_radius: args.filter_radius,
+        ..args.estimator.overrides()
+    };
+    let params = RenderParams::resolve(&scene.render, &overrides)?;
+    let mut config = MetricsConfig::new(scene_path.display().to_string(), params);
+    if args.quick {
+        config = config.quick();
+    }
+    config.table1_sensor_size = params.sensor_size;
+    if !args.sizes.is_empty() {
+        config.figure_sizes = args.sizes.clone();
+    }
+    if !args.resolutions.is_empty() {
+        config.table1_resolutions = args.resolutions.clone();
+    }
+    if !args.figure_resolutions.is_empty() {
+        config.figure_resolutions = args.figure_resolutions.clone();
+    }
+    let all = !(args.table1 || args.fig10 || args.fig11);
+    config.table1 = all || args.table1;
+    config.figures = all || args.fig10 || args.fig11;
+    config.strategy = super::parse_strategy(&args.strategy)?;
+    ensure!(config.figure_sizes.iter().all(|&rd| rd >= 2), "--sizes must be at least 2");
+
+    super::with_device(args.device, |device| {
+        let runs = config.runs();
+        let overall = super::progress_bar(runs.len() as u64, "renders");
+        let start = Instant::now();
+        let mut cache = Cache::open_default();
+        let sensors = RunBar(ProgressBar::hidden());
+        let results = metrics::run(device, &scene, &config, &mut cache, &sensors, &mut |run| {
+            let s = &run.stats;
+            overall.suspend(|| {
+                eprintln!(
+                    "{:?} {}x{} rd {} ({}): {} sensors, {:.4} ms/sensor, {:.1} s",
+                    run.experiment,
+                    s.width,
+                    s.height,
+                    s.sensor_size,
+                    s.strategy,
+                    s.sensors,
+                    s.sensor_time_ms,
+                    s.total_seconds
+                )
+            });
+            overall.inc(1);
+        })?;
+        overall.finish_and_clear();
+        let header = report::Header {
+            device: &device.adapter.name,
+            driver: &device.adapter.driver,
+            config: &config,
+            total_seconds: start.elapsed().as_secs_f64(),
+        };
+        let files = report::write(&args.output, &header, &results).context("writing the metrics")?;
+        eprintln!("{} renders in {:.1} s; wrote:", results.len(), header.total_seconds);
+        for f in files {
+            eprintln!("  {}", f.display());
+        }
+        Ok(())
+    })
+}
