@@ -21,6 +21,12 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Binds the triangle soup as vertex buffer 0.
+    pub fn bind_vertices(&self, device: &Device, cmd: vk::CommandBuffer) {
+        // SAFETY: recording state; the scene outlives the passes that draw it.
+        unsafe { device.raw.cmd_bind_vertex_buffers(cmd, 0, &[self.vertices.raw], &[0]) };
+    }
+
     pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
         let mesh = &scene.mesh;
         let vertices = gpu_types::vertices(mesh);

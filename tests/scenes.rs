@@ -32,10 +32,7 @@ fn rejects(name: &str, obj: Option<&str>, toml_body: Option<&str>, expected: &[&
         assert!(message.contains(piece), "{name}: message {message:?} lacks {piece:?}");
     }
     let out = dir.join("out.exr");
-    let run = common::sensorlight(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-    let stderr = common::stderr(&run);
-    assert_eq!(run.status.code(), Some(1), "{name}: exit code; stderr: {stderr}");
-    assert!(stderr.contains(expected[0]) && !stderr.contains("panicked"), "{name}: stderr {stderr}");
+    common::expect_failure(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()], expected[0]);
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert!(!out.exists() && !dir.join("out.png").exists(), "{name}: output written: {left:?}");
     assert!(left.iter().all(|f| !f.to_string_lossy().contains("tmp")), "{name}: temporary left: {left:?}");

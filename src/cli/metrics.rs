@@ -9,7 +9,6 @@ use clap::Args;
 use indicatif::ProgressBar;
 use sensorlight::metrics::{self, MetricsConfig, report};
 use sensorlight::params::{Overrides, RenderParams};
-use sensorlight::renderer::Progress;
 use sensorlight::scene::{ImageSize, Scene};
 use sensorlight::strategy::Cache;
 
@@ -75,18 +74,6 @@ fn parse_resolution(s: &str) -> Result<ImageSize, String> {
     }
 }
 
-/// Progress over sensors within the current run.
-struct RunBar(ProgressBar);
-
-impl Progress for RunBar {
-    fn queued(&self, n: u64) {
-        self.0.inc_length(n);
-    }
-    fn done(&self, n: u64) {
-        self.0.inc(n);
-    }
-}
-
 pub fn run(args: MetricsArgs) -> Result<ExitCode> {
     let scene_path = args.scene.clone().unwrap_or_else(|| PathBuf::from("scenes/cornell/cornell.toml"));
     if args.scene.is_none() && !scene_path.exists() {
@@ -130,7 +117,8 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
         let overall = super::progress_bar(runs.len() as u64, "renders");
         let start = Instant::now();
         let mut cache = Cache::open_default();
-        let sensors = RunBar(ProgressBar::hidden());
+        // The bar counts renders; sensors within a render are not shown.
+        let sensors = super::SensorBar(ProgressBar::hidden());
         let results = metrics::run(device, &scene, &config, &mut cache, &sensors, &mut |run| {
             let s = &run.stats;
             overall.suspend(|| {

@@ -15,6 +15,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::passes::sensor_maps::StrategyKind;
+use sensorlight::renderer::Progress;
 use sensorlight::scene::Scene;
 use sensorlight::sensors::SensorKind;
 use sensorlight::strategy;
@@ -80,6 +81,18 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
 fn print_warnings(scene: &Scene) {
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
+    }
+}
+
+/// Sensors rendered so far, on a progress bar whose length grows as refinement rounds add sensors.
+struct SensorBar(ProgressBar);
+
+impl Progress for SensorBar {
+    fn queued(&self, n: u64) {
+        self.0.inc_length(n);
+    }
+    fn done(&self, n: u64) {
+        self.0.inc(n);
     }
 }
 

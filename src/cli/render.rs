@@ -5,11 +5,10 @@ use std::process::ExitCode;
 
 use anyhow::{Context as _, Result};
 use clap::Args;
-use indicatif::ProgressBar;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Overrides, RenderParams};
-use sensorlight::renderer::{Progress, RenderOutput, RenderStats, Renderer, default_memory_budget};
+use sensorlight::renderer::{RenderOutput, RenderStats, Renderer, default_memory_budget};
 use sensorlight::scene::Scene;
 
 use super::args::{EstimatorFlags, ImageFlags};
@@ -68,18 +67,6 @@ impl RenderArgs {
     }
 }
 
-/// The progress bar over sensors: its length grows as refinement rounds add sensors.
-struct Bar(ProgressBar);
-
-impl Progress for Bar {
-    fn queued(&self, n: u64) {
-        self.0.inc_length(n);
-    }
-    fn done(&self, n: u64) {
-        self.0.inc(n);
-    }
-}
-
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
     super::print_warnings(&scene);
@@ -91,7 +78,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let (sensor, rd) = (params.estimator.sensor, params.sensor_size);
         let strategy = super::choose_strategy(device, sensor, rd, budget, requested)?;
         let mut renderer = Renderer::new(device, &scene, sensor, rd, Some(budget), strategy)?;
-        let bar = Bar(super::progress_bar(0, "sensors"));
+        let bar = super::SensorBar(super::progress_bar(0, "sensors"));
         let output = renderer.render(&scene, size, &params, &bar)?;
         bar.0.finish_and_clear();
         print_stats(&output.stats);

@@ -283,16 +283,20 @@ fn fig11_markdown(header: &Header<'_>, runs: &[&Run]) -> String {
     out
 }
 
-fn fig10_chart(runs: &[&Run]) -> Chart<'static> {
-    let groups = by_resolution(runs);
-    let mut series: Vec<Series> = groups
-        .iter()
+/// One line per resolution: `value` of each run against its map size.
+fn series_by_resolution(runs: &[&Run], value: fn(&Run) -> f64) -> Vec<Series> {
+    by_resolution(runs)
+        .into_iter()
         .map(|(resolution, rs)| Series {
-            name: resolution.clone(),
-            points: rs.iter().map(|r| (r.stats.sensor_size as f64, r.stats.sensor_time_ms)).collect(),
+            name: resolution,
+            points: rs.iter().map(|r| (r.stats.sensor_size as f64, value(r))).collect(),
             dashed: false,
         })
-        .collect();
+        .collect()
+}
+
+fn fig10_chart(runs: &[&Run]) -> Chart<'static> {
+    let mut series = series_by_resolution(runs, |r| r.stats.sensor_time_ms);
     // A quadratic through the largest resolution's largest size, for reference.
     if let Some(&(x, y)) = series.last().and_then(|s| s.points.last()) {
         let xs: Vec<f64> = series[0].points.iter().map(|p| p.0).collect();
@@ -313,14 +317,7 @@ fn fig10_chart(runs: &[&Run]) -> Chart<'static> {
 }
 
 fn fig11_chart(runs: &[&Run]) -> Chart<'static> {
-    let series = by_resolution(runs)
-        .into_iter()
-        .map(|(resolution, rs)| Series {
-            name: resolution,
-            points: rs.iter().map(|r| (r.stats.sensor_size as f64, r.stats.sensors as f64)).collect(),
-            dashed: false,
-        })
-        .collect();
+    let series = series_by_resolution(runs, |r| r.stats.sensors as f64);
     Chart {
         title: "Fig. 11: number of sensors against sensor map size",
         x_label: "sensor map size rd (texels per side)",

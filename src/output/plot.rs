@@ -71,15 +71,7 @@ impl Chart<'_> {
             self.draw(&root)?;
             root.present().map_err(|e| anyhow!("plot: {e}"))?;
         }
-        atomic::write_file(path, |out| {
-            let mut encoder = png::Encoder::new(out, w, h);
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            let mut writer = encoder.write_header()?;
-            writer.write_image_data(&rgb)?;
-            writer.finish()?;
-            Ok(())
-        })
+        super::png::write_rgb8(path, w, h, &rgb)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<()>

@@ -21,14 +21,18 @@ pub fn tone_map(pixels: &[Vec4], exposure: f32) -> Vec<u8> {
 
 /// Writes the tone-mapped image atomically.
 pub fn write(path: &Path, width: u32, height: u32, pixels: &[Vec4], exposure: f32) -> Result<()> {
-    let bytes = tone_map(pixels, exposure);
+    write_rgb8(path, width, height, &tone_map(pixels, exposure))
+}
+
+/// Writes 8-bit sRGB RGB bytes, row-major from the top, as a PNG, atomically.
+pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     atomic::write_file(path, |w| {
         let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = encoder.write_header()?;
-        writer.write_image_data(&bytes)?;
+        writer.write_image_data(rgb)?;
         writer.finish()?;
         Ok(())
     })

@@ -156,19 +156,8 @@ impl GBufferPass {
         ];
         device.submit_and_wait(|cmd| {
             framebuffer.begin(cmd, &self.render_pass, &clears);
-            // SAFETY: recording state; every bound object outlives the submission (we wait on it).
-            unsafe {
-                device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
-                device.raw.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layout.raw,
-                    0,
-                    &[self.set],
-                    &[],
-                );
-                device.raw.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
-            }
+            self.pipeline.bind(device, cmd, vk::PipelineBindPoint::GRAPHICS, &self.layout, self.set);
+            scene.bind_vertices(device, cmd);
             self.layout.push(cmd, &push);
             // SAFETY: as above.
             unsafe {

@@ -82,10 +82,6 @@ impl<'a> Integrator<'a> {
         })
     }
 
-    pub fn bvh(&self) -> &Bvh {
-        &self.bvh
-    }
-
     /// `Ck` of the first surface along the unit-direction `ray` beyond the near distance (paper §III-C).
     pub fn ck(&self, ray: &Ray) -> Vec3 {
         let Some(hit) = self.bvh.intersect(ray, self.near, f32::INFINITY) else { return self.params.background };

@@ -70,11 +70,6 @@ impl SensorFrame {
         (forward + right * (ndc_x * tan) - up * (ndc_y * tan)).normalize()
     }
 
-    /// `d` in frame coordinates (x along t, y along b, z along n).
-    pub fn to_local(&self, d: Vec3) -> Vec3 {
-        Vec3::new(d.dot(self.t), d.dot(self.b), d.dot(self.n))
-    }
-
     pub fn to_world(&self, local: Vec3) -> Vec3 {
         self.t * local.x + self.b * local.y + self.n * local.z
     }

@@ -49,7 +49,6 @@ pub struct Refinement {
     active: Vec<Quad>,
     interpolated: Vec<GpuQuad>,
     floor: Option<f32>,
-    rounds: u32,
 }
 
 impl Refinement {
@@ -81,7 +80,6 @@ impl Refinement {
             active,
             interpolated: Vec::new(),
             floor: None,
-            rounds: 0,
         };
         let mut first = Vec::new();
         for &y in &ys {
@@ -108,7 +106,6 @@ impl Refinement {
     /// Judges every active quad with the radiance map `r` (all queued sensors done); returns the next
     /// sensors to place, empty when the refinement is finished.
     pub fn step(&mut self, r: &[Vec4]) -> Vec<u32> {
-        self.rounds += 1;
         let floor = *self.floor.get_or_insert_with(|| {
             let brightest = self
                 .sensed
@@ -186,11 +183,6 @@ impl Refinement {
     /// No quad is left to judge.
     pub fn is_finished(&self) -> bool {
         self.active.is_empty()
-    }
-
-    /// Rounds of judging so far.
-    pub fn rounds(&self) -> u32 {
-        self.rounds
     }
 
     /// Whether pixel `i` was sensed.

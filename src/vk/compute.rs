@@ -49,18 +49,7 @@ impl ComputeKernel {
 
     /// Records bind, push constants and a dispatch of `groups` workgroups.
     pub fn dispatch<T: bytemuck::Pod>(&self, device: &Device, cmd: vk::CommandBuffer, push: &T, groups: [u32; 3]) {
-        // SAFETY: recording state; the set's resources are kept alive by the pass that owns this kernel.
-        unsafe {
-            device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
-            device.raw.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout.raw,
-                0,
-                &[self.set],
-                &[],
-            );
-        }
+        self.pipeline.bind(device, cmd, vk::PipelineBindPoint::COMPUTE, &self.layout, self.set);
         self.layout.push(cmd, push);
         // SAFETY: as above.
         unsafe { device.raw.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };

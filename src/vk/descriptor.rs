@@ -60,11 +60,6 @@ impl SetWriter {
         self
     }
 
-    pub fn uniform_buffer(mut self, binding: u32, buffer: &Buffer) -> Self {
-        self.buffers.push((binding, vk::DescriptorType::UNIFORM_BUFFER, buffer.descriptor()));
-        self
-    }
-
     /// A storage image, in `GENERAL` layout when used.
     pub fn storage_image(mut self, binding: u32, view: vk::ImageView) -> Self {
         let info = vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL);

@@ -107,17 +107,9 @@ impl Device {
         }))
     }
 
-    pub fn instance(&self) -> &ash::Instance {
-        &self.instance.raw
-    }
-
     /// What the validation layer reported so far. Keep a clone to read it after the device is gone.
     pub fn validation_log(&self) -> &Arc<ValidationLog> {
         self.instance.log()
-    }
-
-    pub fn validation_enabled(&self) -> bool {
-        self.instance.validation_enabled()
     }
 
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {

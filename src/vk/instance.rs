@@ -86,10 +86,6 @@ impl Instance {
     pub fn log(&self) -> &Arc<ValidationLog> {
         &self.log
     }
-
-    pub fn validation_enabled(&self) -> bool {
-        self.debug.is_some()
-    }
 }
 
 impl Drop for Instance {

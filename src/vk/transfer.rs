@@ -21,6 +21,19 @@ pub fn texel_bytes(format: vk::Format) -> Result<usize> {
     })
 }
 
+/// A copy of every layer of `image` to or from a tightly packed buffer.
+fn whole_image(image: &Image) -> vk::BufferImageCopy {
+    let d = image.desc;
+    vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: image.range(0, 1).aspect_mask,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: d.layers,
+        })
+        .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })
+}
+
 /// Copies every layer of `image` (in `GENERAL` layout, its writers finished) to the host, layer-major, rows
 /// top to bottom, as `T` (e.g. `[f32; 4]` for RGBA32F, `u32` for R32_UINT, `[u16; 4]` for RGBA16F).
 pub fn read_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image) -> Result<Vec<T>> {
@@ -42,14 +55,7 @@ pub fn read_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image) -> Resu
     )?;
     device.submit_and_wait(|cmd| {
         let range = image.full_range();
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: range.aspect_mask,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: d.layers,
-            })
-            .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })];
+        let region = [whole_image(image)];
         // Every pass leaves its images in GENERAL; copies read best from TRANSFER_SRC_OPTIMAL.
         barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL now; the buffer is large enough.
@@ -104,14 +110,7 @@ pub fn write_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image, data: 
     staging.write(0, data)?;
     device.submit_and_wait(|cmd| {
         let range = image.full_range();
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: range.aspect_mask,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: d.layers,
-            })
-            .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })];
+        let region = [whole_image(image)];
         barrier::layout(
             device,
             cmd,

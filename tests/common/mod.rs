@@ -48,6 +48,17 @@ pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// Runs `sensorlight args` and checks that it fails the way a user error should: exit code 1, a message
+/// containing `expected`, no panic. Returns stderr.
+pub fn expect_failure(args: &[&str], expected: &str) -> String {
+    let run = sensorlight(args);
+    let stderr = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{args:?}: exit code; stderr: {stderr}");
+    assert!(stderr.contains(expected), "{args:?}: stderr lacks {expected:?}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    stderr
+}
+
 pub fn project(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }

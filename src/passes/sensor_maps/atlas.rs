@@ -12,7 +12,7 @@ use std::time::Duration;
 use anyhow::{Result, ensure};
 use ash::vk;
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind, build_views};
+use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
@@ -79,8 +79,7 @@ impl Strategy for Atlas {
 
     fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
         let layers = self.desc.layers();
-        let views = build_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer);
-        self.pipeline.views.write(0, &views)?;
+        self.pipeline.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
         let count = frames.len() as u32;
         let (device, pipeline) = (ctx.device, &self.pipeline);
         // Only the rows of tiles this batch uses are cleared and drawn.

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind, build_views};
+use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
@@ -90,8 +90,7 @@ impl Strategy for Layered {
 
     fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
         let layers = self.desc.layers();
-        let views = build_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer);
-        self.pipeline.views.write(0, &views)?;
+        self.pipeline.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
         let count = frames.len() as u32;
         let device = ctx.device;
         self.prepare_framebuffer(device, count)?;

@@ -270,19 +270,8 @@ impl SensorPipeline {
 
     /// Binds pipeline, descriptors and the scene's vertices.
     fn bind(&self, device: &Device, cmd: vk::CommandBuffer, scene: &GpuScene) {
-        // SAFETY: recording state; the bound objects outlive the submission (strategies wait on it).
-        unsafe {
-            device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
-            device.raw.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout.raw,
-                0,
-                &[self.set],
-                &[],
-            );
-            device.raw.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
-        }
+        self.pipeline.bind(device, cmd, vk::PipelineBindPoint::GRAPHICS, &self.layout, self.set);
+        scene.bind_vertices(device, cmd);
     }
 
     /// Draws the scene `instances` times starting at view `first_instance`.
@@ -301,22 +290,30 @@ impl SensorPipeline {
     }
 }
 
-/// The views of `frames`, sensor-major, in [`crate::sensors::layout::views`] order; `slot(i, view)` gives
-/// the value of each view's `layer` field (the layer or tile it draws into).
-fn build_views(
-    frames: &[SensorFrame],
-    layouts: &[ViewLayout],
-    near: f32,
-    slot: impl Fn(u32, &ViewLayout) -> u32,
-) -> Vec<GpuSensorView> {
-    frames
-        .iter()
-        .enumerate()
-        .flat_map(|(i, frame)| {
-            let slot = &slot;
-            layouts.iter().map(move |v| {
-                GpuSensorView::new(frame.view_proj(v, near), v.clip_horizon.then(|| frame.horizon()), slot(i as u32, v))
+impl SensorPipeline {
+    /// Writes the views of `frames`, sensor-major, in [`crate::sensors::layout::views`] order; `slot(i, view)`
+    /// gives each view's `layer` field (the layer or tile it draws into).
+    fn write_views(
+        &mut self,
+        frames: &[SensorFrame],
+        layouts: &[ViewLayout],
+        near: f32,
+        slot: impl Fn(u32, &ViewLayout) -> u32,
+    ) -> Result<()> {
+        let views: Vec<GpuSensorView> = frames
+            .iter()
+            .enumerate()
+            .flat_map(|(i, frame)| {
+                let slot = &slot;
+                layouts.iter().map(move |v| {
+                    GpuSensorView::new(
+                        frame.view_proj(v, near),
+                        v.clip_horizon.then(|| frame.horizon()),
+                        slot(i as u32, v),
+                    )
+                })
             })
-        })
-        .collect()
+            .collect();
+        self.views.write(0, &views)
+    }
 }

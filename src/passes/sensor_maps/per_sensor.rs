@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind, build_views};
+use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
@@ -65,8 +65,7 @@ impl Strategy for PerSensor {
 
     fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
         let layers = self.desc.layers();
-        let views = build_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer);
-        self.pipeline.views.write(0, &views)?;
+        self.pipeline.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
         let (device, pipeline) = (ctx.device, &self.pipeline);
         let per_sensor = self.layouts.len() as u32;
         let clears = MapImages::clears(ctx.background);
