@@ -25,6 +25,11 @@ pub struct Chart<'a> {
     pub series: Vec<Series>,
 }
 
+/// An axis label: whole numbers from 100 up, the value as it is below.
+fn tick(v: &f64) -> String {
+    if v.abs() >= 100.0 { format!("{v:.0}") } else { format!("{v}") }
+}
+
 /// Makes the embedded DejaVu Sans plotters' "sans-serif" (once).
 fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
@@ -100,13 +105,13 @@ impl Chart<'_> {
         macro_rules! finish {
             ($chart:expr) => {{
                 let mut chart = $chart;
-                // Integers on a log-2 axis (16, 32, …), three significant digits otherwise.
+                // Integers on a log-2 axis (16, 32, …); no ".0" on large round values.
                 let integer = |v: &f64| format!("{v:.0}");
-                let general = |v: &f64| format!("{v}");
-                let x_format: &dyn Fn(&f64) -> String = if self.log_x { &integer } else { &general };
+                let x_format: &dyn Fn(&f64) -> String = if self.log_x { &integer } else { &tick };
                 chart
                     .configure_mesh()
                     .x_label_formatter(x_format)
+                    .y_label_formatter(&tick)
                     .x_desc(self.x_label)
                     .y_desc(self.y_label)
                     .label_style(("sans-serif", 14))
