@@ -8,7 +8,8 @@ use std::time::Duration;
 use anyhow::Result;
 use ash::vk;
 
-use super::sensor_maps::{DEPTH_FORMAT, MAP_FORMAT};
+use super::DEPTH_FORMAT;
+use super::sensor_maps::MAP_FORMAT;
 use crate::shaders;
 use crate::vk::{Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass};
 

@@ -7,6 +7,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::Vec4;
 
+use super::DEPTH_FORMAT;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GBufferPush, VERTEX_POSITION_OFFSET, VERTEX_SURFACE_OFFSET, Vertex};
 use crate::scene::{Camera, ImageSize, SurfaceId};
@@ -18,14 +19,13 @@ use crate::vk::{
 
 /// Colour attachments, in shader output order: position, normal, albedo, emission, surface id.
 pub const ATTACHMENT_COUNT: u32 = 5;
-const COLOR_FORMATS: [vk::Format; ATTACHMENT_COUNT as usize] = [
+pub const COLOR_FORMATS: [vk::Format; ATTACHMENT_COUNT as usize] = [
     vk::Format::R32G32B32A32_SFLOAT,
     vk::Format::R32G32B32A32_SFLOAT,
     vk::Format::R32G32B32A32_SFLOAT,
     vk::Format::R32G32B32A32_SFLOAT,
     vk::Format::R32_UINT,
 ];
-const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// Camera near plane as a fraction of the scene's diagonal (reversed-Z: precision does not need it larger).
 pub const NEAR: f32 = 1e-3;

@@ -8,3 +8,20 @@ pub mod gbuffer;
 pub mod interpolate;
 pub mod reduce;
 pub mod sensor_maps;
+
+use ash::vk;
+
+/// Depth format of every raster pass. Floats because the projections are reversed-Z (1 at the near plane,
+/// 0 at infinity), which keeps precision only with a floating-point depth buffer.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Every image format a pass creates, with the features it uses, for the device check in `vk::adapter`.
+/// All but `D32_SFLOAT` are mandatory in Vulkan 1.2, which lets a device offer `X8_D24` depth instead.
+pub fn required_formats() -> Vec<(vk::Format, vk::FormatFeatureFlags)> {
+    let colour = vk::FormatFeatureFlags::COLOR_ATTACHMENT | vk::FormatFeatureFlags::STORAGE_IMAGE;
+    let mut formats: Vec<_> = gbuffer::COLOR_FORMATS.iter().map(|&f| (f, colour)).collect();
+    formats.push((sensor_maps::MAP_FORMAT, colour));
+    formats.push((DEPTH_FORMAT, vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT));
+    formats.dedup();
+    formats
+}

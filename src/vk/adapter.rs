@@ -8,7 +8,7 @@ use ash::vk;
 use super::instance::{INSTALL_HINT, Instance};
 
 /// The limits and features that decide batch sizes and which sensor strategies can run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Limits {
     pub max_image_dimension_2d: u32,
     pub max_image_array_layers: u32,
@@ -53,6 +53,8 @@ pub struct Adapter {
     pub device_local_bytes: u64,
     pub limits: Limits,
     pub features: Features,
+    /// Formats the passes need (`passes::required_formats`) that this device lacks, with the missing use.
+    pub missing_formats: Vec<String>,
 }
 
 impl Adapter {
@@ -66,6 +68,9 @@ impl Adapter {
         }
         if self.limits.max_color_attachments < crate::passes::gbuffer::ATTACHMENT_COUNT {
             return Some(format!("only {} colour attachments", self.limits.max_color_attachments));
+        }
+        if !self.missing_formats.is_empty() {
+            return Some(format!("unsupported formats: {}", self.missing_formats.join(", ")));
         }
         None
     }
@@ -145,6 +150,15 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
         .unwrap_or(0);
     let name = p.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let missing_formats = crate::passes::required_formats()
+        .into_iter()
+        .filter(|&(format, needed)| {
+            // SAFETY: a query on a valid physical device.
+            let have = unsafe { raw.get_physical_device_format_properties(handle, format) }.optimal_tiling_features;
+            !have.contains(needed)
+        })
+        .map(|(format, needed)| format!("{format:?} as {needed:?}"))
+        .collect();
     let driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Adapter {
         index,
@@ -176,6 +190,7 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
             multiview: features11.multiview == vk::TRUE,
             shader_clip_distance: core_features.shader_clip_distance == vk::TRUE,
         },
+        missing_formats,
     }
 }
 
@@ -195,4 +210,44 @@ pub fn select(adapters: &[Adapter], requested: Option<usize>) -> Result<&Adapter
             adapters.iter().map(|a| format!("{a}: {}", a.unsupported_reason().unwrap_or_default())).collect();
         anyhow::anyhow!("no usable Vulkan device (found: {}); {INSTALL_HINT}", found.join("; "))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn adapter(index: usize, kind: vk::PhysicalDeviceType, missing_formats: &[&str]) -> Adapter {
+        Adapter {
+            index,
+            handle: vk::PhysicalDevice::null(),
+            name: format!("device {index}"),
+            kind,
+            driver: "test".into(),
+            api_version: vk::API_VERSION_1_3,
+            queue_family: Some(0),
+            device_local_bytes: 1 << 30,
+            limits: Limits { max_color_attachments: 8, ..Limits::default() },
+            features: Features::default(),
+            missing_formats: missing_formats.iter().map(|s| s.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn prefers_a_gpu_and_skips_devices_that_lack_a_format() {
+        let cpu = adapter(0, vk::PhysicalDeviceType::CPU, &[]);
+        let gpu = adapter(1, vk::PhysicalDeviceType::DISCRETE_GPU, &[]);
+        let no_depth = adapter(2, vk::PhysicalDeviceType::DISCRETE_GPU, &["D32_SFLOAT as DEPTH_STENCIL_ATTACHMENT"]);
+        // In enumeration order, as `enumerate` returns them.
+        let all = [cpu.clone(), gpu, no_depth.clone()];
+        assert_eq!(select(&all, None).unwrap().index, 1);
+        assert_eq!(select(&[no_depth.clone(), cpu], None).unwrap().index, 0);
+
+        let err = select(std::slice::from_ref(&no_depth), None).unwrap_err().to_string();
+        assert!(err.contains("D32_SFLOAT"), "{err}");
+        assert_eq!(select(&all, Some(0)).unwrap().index, 0, "an explicit --device is honoured");
+        let err = select(&all, Some(2)).unwrap_err().to_string();
+        assert!(err.contains("--device 2") && err.contains("unsupported formats"), "{err}");
+        let err = select(&all, Some(7)).unwrap_err().to_string();
+        assert!(err.contains("only 3 device(s)"), "{err}");
+    }
 }

@@ -28,6 +28,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_POSITION_OFFSET, VERTEX_SURFACE_OFFSET, Vertex};
+use crate::passes::DEPTH_FORMAT;
 use crate::passes::reduce::ReducePass;
 use crate::sensors::SensorKind;
 use crate::sensors::frame::SensorFrame;
@@ -41,7 +42,6 @@ use crate::vk::{
 /// Texel format of the sensor maps: half floats hold `Ck` to 3 significant digits up to 65504, ample for
 /// radiance, at half the bandwidth of RGBA32F (measured in docs/BENCHMARKS.md).
 pub const MAP_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// Bytes per sensor-map texel: colour and depth.
 pub const TEXEL_BYTES: u64 = 8 + 4;
 
