@@ -184,14 +184,19 @@ pub fn choose(
     let desc = StrategyDesc { sensor, rd, budget, near: 0.0 };
     let checked = |kind: StrategyKind, cache: &mut Cache, log: &mut dyn FnMut(String)| -> Result<CheckResult> {
         let check_key = check_key(&key, sensor, kind);
+        let verdict = |result: &CheckResult| if result.passed { "passes" } else { "FAILS (refused on this device)" };
         if let Some(result) = cache.checks.get(&check_key) {
+            // A refusal is worth repeating every time; a pass is not.
+            if !result.passed {
+                log(format!("self-check (cached): {kind} vs per-sensor: {}", verdict(result)));
+            }
             return Ok(*result);
         }
         let result = self_check(device, sensor, kind)?;
-        let verdict = if result.passed { "passes" } else { "FAILS (refused on this device)" };
         log(format!(
-            "self-check: {kind} vs per-sensor: max difference {:.2e} of the brightest R: {verdict}",
-            result.max_difference
+            "self-check: {kind} vs per-sensor: max difference {:.2e} of the brightest R: {}",
+            result.max_difference,
+            verdict(&result)
         ));
         cache.checks.insert(check_key, result);
         cache.save()?;
