@@ -85,6 +85,9 @@ fn median(values: &[f64]) -> f64 {
 pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(String)) -> Result<BenchReport> {
     let sensor = config.estimator.sensor;
     let budget = default_memory_budget(device);
+    for &rd in &config.sizes {
+        sensor.check_size(rd, device.adapter.limits.max_image_dimension_2d)?;
+    }
     let mut checks = Vec::new();
     let mut skipped = Vec::new();
     let mut strategies = Vec::new();
@@ -113,7 +116,6 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(Strin
     let mut measurements = Vec::new();
     let mut sizes = Vec::new();
     for &rd in &config.sizes {
-        sensor.check_size(rd, device.adapter.limits.max_image_dimension_2d)?;
         let mut renderers = strategies
             .iter()
             .map(|&kind| Renderer::new(device, &probe.scene, sensor, rd, Some(budget), kind))

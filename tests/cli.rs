@@ -109,8 +109,9 @@ fn a_tiny_memory_budget_means_more_batches_not_failure() {
 #[test]
 fn bad_render_parameters_are_clear_errors() {
     let scene = common::project("scenes/cornell/cornell.toml");
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["--sensor-size", "0"], "--sensor-size"),
+        (&["--fov", "0"], "--fov"),
         (&["--sensor-size", "1000000"], "--sensor-size 1000000 exceeds this device"),
         (&["--sensor-size", "15"], "even"),
         (&["--sensor", "frustum", "--fov", "180"], "--fov"),
@@ -127,13 +128,38 @@ fn bad_render_parameters_are_clear_errors() {
     }
 }
 
+/// Outputs that cannot be written are refused before the scene is even loaded, not after a long render.
+#[test]
+fn unwritable_outputs_are_refused_before_any_work() {
+    let dir = common::scratch("render_unwritable");
+    let exr = dir.join("x.exr");
+    let missing = dir.join("missing/x.exr");
+    let (exr, missing, dir_s) = (exr.to_str().unwrap(), missing.to_str().unwrap(), dir.to_str().unwrap());
+    // The scene does not exist either: the output is checked first.
+    let cases: [(&[&str], &str); 5] = [
+        (&["-o", missing], "does not exist"),
+        (&["-o", dir_s], "expected a .exr file name"),
+        (&["-o", &format!("{dir_s}/x.png")], "expected a .exr file name"),
+        (&["-o", exr, "--stats-json", dir_s], "is a directory"),
+        (&["-o", exr, "--stats-json", &format!("{dir_s}/missing/s.json")], "does not exist"),
+    ];
+    for (flags, expected) in cases {
+        let mut args = vec!["render", "no-such-scene.toml"];
+        args.extend_from_slice(flags);
+        common::expect_failure(&args, expected);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "{flags:?} left a file behind");
+    }
+    common::expect_failure(&["reference", "no-such-scene.toml", "-o", missing], "does not exist");
+    common::expect_failure(&["render", "no-such-scene.toml", "-o", exr], "no-such-scene.toml");
+}
+
 #[test]
 fn zero_image_size_is_an_error() {
     let run = common::sensorlight(&[
         "render",
         common::project("scenes/cornell/cornell.toml").to_str().unwrap(),
         "-o",
-        "/nonexistent/x.exr",
+        common::scratch("render_zero").join("x.exr").to_str().unwrap(),
         "--width",
         "0",
     ]);

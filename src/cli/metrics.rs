@@ -79,6 +79,11 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
     if args.scene.is_none() && !scene_path.exists() {
         bail!("no --scene given and {} is not here: run from the project root or pass --scene", scene_path.display());
     }
+    ensure!(
+        !args.output.exists() || args.output.is_dir(),
+        "-o {}: exists and is not a directory",
+        args.output.display()
+    );
     let scene = Scene::load(&scene_path)?;
     super::print_warnings(&scene);
     // The paper's sensor unless the command line or the scene says otherwise.

@@ -57,6 +57,17 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     }
 }
 
+/// Checks, before any work, that an EXR output and what is written beside it (the PNG preview unless
+/// `png` is false, `extra` files) can be written.
+fn check_exr_outputs(exr: &std::path::Path, png: bool, extra: &[&std::path::Path]) -> Result<()> {
+    sensorlight::output::atomic::check_extension(exr, "exr")?;
+    let png = png.then(|| exr.with_extension("png"));
+    for path in [Some(exr), png.as_deref()].into_iter().flatten().chain(extra.iter().copied()) {
+        sensorlight::output::atomic::check_writable(path)?;
+    }
+    Ok(())
+}
+
 /// Exit code when the validation layer reported anything.
 const EXIT_VALIDATION: u8 = 3;
 

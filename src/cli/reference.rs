@@ -33,6 +33,7 @@ pub struct ReferenceArgs {
 }
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
+    super::check_exr_outputs(&args.output, args.image.write_png(), &[])?;
     let scene = Scene::load(&args.scene)?;
     super::print_warnings(&scene);
     let params = EstimatorParams::resolve(&scene.render, &args.estimator.overrides())?;

@@ -68,6 +68,8 @@ impl RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
+    let stats_json: Vec<&std::path::Path> = args.stats_json.iter().map(PathBuf::as_path).collect();
+    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json)?;
     let scene = Scene::load(&args.scene)?;
     super::print_warnings(&scene);
     let params = RenderParams::resolve(&scene.render, &args.overrides())?;

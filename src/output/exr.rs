@@ -52,7 +52,8 @@ impl ExrImage {
 
 /// Reads the named channels of an EXR written by [`ExrImage::write`] (for tests and tools).
 pub fn read_channels(path: &Path, names: &[&str]) -> Result<(usize, usize, Vec<Vec<f32>>)> {
-    let image = read_all_flat_layers_from_file(path)?;
+    let image =
+        read_all_flat_layers_from_file(path).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?;
     let layer = image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: no layers", path.display()))?;
     let (w, h) = (layer.size.width(), layer.size.height());
     let mut out = Vec::new();

@@ -29,14 +29,13 @@ impl SensorKind {
 
     /// `name` is "frustum" or "hemicube"; `fov_deg` applies to frustum sensors and must lie in (0, 180).
     pub fn parse(name: &str, fov_deg: f32) -> Result<Self> {
+        // Checked for hemicubes too, which ignore it: a nonsense value is a mistake either way.
+        ensure!(
+            fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0,
+            "--fov must lie strictly between 0 and 180 degrees (a perspective view cannot see 180°), got {fov_deg}"
+        );
         match name {
-            "frustum" => {
-                ensure!(
-                    fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0,
-                    "--fov must lie strictly between 0 and 180 degrees (a perspective view cannot see 180°), got {fov_deg}"
-                );
-                Ok(Self::Frustum { fov_deg })
-            }
+            "frustum" => Ok(Self::Frustum { fov_deg }),
             "hemicube" => Ok(Self::Hemicube),
             other => bail!("unknown sensor kind '{other}': expected 'frustum' or 'hemicube'"),
         }
