@@ -22,6 +22,20 @@ pub struct EstimatorFlags {
     pub background: Option<[f32; 3]>,
 }
 
+/// Adaptive refinement and filtering (paper §III-G, §III-H): shared by `render` and `metrics`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct RefinementFlags {
+    /// dt: initial sensor grid step, a power of two [default: 16]
+    #[arg(long)]
+    pub tile: Option<u32>,
+    /// Interpolate a quad when R varies by less than this between its corners (0 = sense every pixel) [default: 0.2]
+    #[arg(long, allow_negative_numbers = true)]
+    pub dradiance: Option<f32>,
+    /// Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: 2]
+    #[arg(long)]
+    pub filter_radius: Option<u32>,
+}
+
 /// Output size and preview: shared by `render` and `reference`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct ImageFlags {
@@ -51,6 +65,13 @@ impl EstimatorFlags {
             background: self.background,
             ..Default::default()
         }
+    }
+}
+
+impl RefinementFlags {
+    /// `base` with these flags set.
+    pub fn overrides(&self, base: Overrides) -> Overrides {
+        Overrides { tile: self.tile, dradiance: self.dradiance, filter_radius: self.filter_radius, ..base }
     }
 }
 

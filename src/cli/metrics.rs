@@ -12,7 +12,7 @@ use sensorlight::params::{Overrides, RenderParams};
 use sensorlight::scene::{ImageSize, Scene};
 use sensorlight::strategy::Cache;
 
-use super::args::EstimatorFlags;
+use super::args::{EstimatorFlags, RefinementFlags};
 
 #[derive(Args)]
 pub struct MetricsArgs {
@@ -48,15 +48,8 @@ pub struct MetricsArgs {
     quick: bool,
     #[command(flatten)]
     estimator: EstimatorFlags,
-    /// dt: initial sensor grid step [default: 16]
-    #[arg(long)]
-    tile: Option<u32>,
-    /// Refinement threshold [default: 0.2]
-    #[arg(long, allow_negative_numbers = true)]
-    dradiance: Option<f32>,
-    /// Id-constrained filter radius [default: 2]
-    #[arg(long)]
-    filter_radius: Option<u32>,
+    #[command(flatten)]
+    refinement: RefinementFlags,
     /// Batching strategy: auto or a name (see `render --help`)
     #[arg(long, default_value = "auto")]
     strategy: String,
@@ -88,14 +81,11 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
     super::print_warnings(&scene);
     // The paper's sensor unless the command line or the scene says otherwise.
     let sensor = args.estimator.sensor.clone().or_else(|| scene.render.sensor.clone()).or(Some("frustum".into()));
-    let overrides = Overrides {
+    let overrides = args.refinement.overrides(Overrides {
         sensor,
         sensor_size: args.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
-        tile: args.tile,
-        dradiance: args.dradiance,
-        filter_radius: args.filter_radius,
         ..args.estimator.overrides()
-    };
+    });
     let params = RenderParams::resolve(&scene.render, &overrides)?;
     let mut config = MetricsConfig::new(scene_path.display().to_string(), params);
     if args.quick {

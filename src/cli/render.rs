@@ -11,7 +11,7 @@ use sensorlight::params::{Overrides, RenderParams};
 use sensorlight::renderer::{RenderOutput, RenderStats, Renderer, default_memory_budget};
 use sensorlight::scene::Scene;
 
-use super::args::{EstimatorFlags, ImageFlags};
+use super::args::{EstimatorFlags, ImageFlags, RefinementFlags};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -27,15 +27,8 @@ pub struct RenderArgs {
     /// rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: 256]
     #[arg(long)]
     sensor_size: Option<u32>,
-    /// dt: initial sensor grid step, a power of two [default: 16]
-    #[arg(long)]
-    tile: Option<u32>,
-    /// Interpolate a quad when R varies by less than this between its corners (0 = sense every pixel) [default: 0.2]
-    #[arg(long, allow_negative_numbers = true)]
-    dradiance: Option<f32>,
-    /// Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: 2]
-    #[arg(long)]
-    filter_radius: Option<u32>,
+    #[command(flatten)]
+    refinement: RefinementFlags,
     /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), surface_id
     #[arg(long)]
     aovs: bool,
@@ -56,14 +49,11 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn overrides(&self) -> Overrides {
-        Overrides {
+        self.refinement.overrides(Overrides {
             sensor_size: self.sensor_size,
-            tile: self.tile,
-            dradiance: self.dradiance,
-            filter_radius: self.filter_radius,
             exposure: self.image.exposure,
             ..self.estimator.overrides()
-        }
+        })
     }
 }
 
