@@ -133,8 +133,11 @@ impl GpuSensorView {
     }
 }
 
-/// Byte offset of each `Vertex` attribute, for the pipeline's vertex input description.
-pub const VERTEX_POSITION_OFFSET: u32 = std::mem::offset_of!(Vertex, position) as u32;
-pub const VERTEX_SURFACE_OFFSET: u32 = std::mem::offset_of!(Vertex, surface) as u32;
+/// `Vertex` as the raster pipelines read it from binding 0: (location, format, byte offset).
+pub const VERTEX_ATTRIBUTES: [(u32, ash::vk::Format, u32); 2] = [
+    (0, ash::vk::Format::R32G32B32_SFLOAT, std::mem::offset_of!(Vertex, position) as u32),
+    (1, ash::vk::Format::R32_UINT, std::mem::offset_of!(Vertex, surface) as u32),
+];
+pub const VERTEX_STRIDE: u32 = size_of::<Vertex>() as u32;
 
 const _: () = assert!(size_of::<Vertex>() == 16);

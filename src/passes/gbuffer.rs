@@ -7,9 +7,9 @@ use anyhow::Result;
 use ash::vk;
 use glam::Vec4;
 
-use super::DEPTH_FORMAT;
+use super::{DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GBufferPush, VERTEX_POSITION_OFFSET, VERTEX_SURFACE_OFFSET, Vertex};
+use crate::gpu_types::{GBufferPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::scene::{Camera, ImageSize, SurfaceId};
 use crate::shaders;
 use crate::vk::{
@@ -87,13 +87,9 @@ impl GBufferPass {
                 fragment: shaders::GBUFFER_FRAG,
                 render_pass: render_pass.raw,
                 color_attachments: ATTACHMENT_COUNT,
-                vertex_stride: size_of::<Vertex>() as u32,
-                vertex_attributes: &[
-                    (0, vk::Format::R32G32B32_SFLOAT, VERTEX_POSITION_OFFSET),
-                    (1, vk::Format::R32_UINT, VERTEX_SURFACE_OFFSET),
-                ],
-                // Reversed-Z: nearer is larger.
-                depth_compare: Some(vk::CompareOp::GREATER),
+                vertex_stride: VERTEX_STRIDE,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                depth_compare: Some(DEPTH_COMPARE),
             },
         )?;
         Ok(Self { pipeline, _pool: pool, set, layout, render_pass })

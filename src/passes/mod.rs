@@ -14,6 +14,8 @@ use ash::vk;
 /// Depth format of every raster pass. Floats because the projections are reversed-Z (1 at the near plane,
 /// 0 at infinity), which keeps precision only with a floating-point depth buffer.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Reversed-Z: nearer is larger.
+pub const DEPTH_COMPARE: vk::CompareOp = vk::CompareOp::GREATER;
 
 /// Every image format a pass creates, with the features it uses, for the device check in `vk::adapter`.
 /// All but `D32_SFLOAT` are mandatory in Vulkan 1.2, which lets a device offer `X8_D24` depth instead.

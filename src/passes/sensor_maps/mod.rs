@@ -27,9 +27,9 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_POSITION_OFFSET, VERTEX_SURFACE_OFFSET, Vertex};
-use crate::passes::DEPTH_FORMAT;
+use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::passes::reduce::ReducePass;
+use crate::passes::{DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::sensors::SensorKind;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::ViewLayout;
@@ -256,13 +256,9 @@ impl SensorPipeline {
                 fragment: shaders::SENSOR_FRAG,
                 render_pass: render_pass.raw,
                 color_attachments: 1,
-                vertex_stride: size_of::<Vertex>() as u32,
-                vertex_attributes: &[
-                    (0, vk::Format::R32G32B32_SFLOAT, VERTEX_POSITION_OFFSET),
-                    (1, vk::Format::R32_UINT, VERTEX_SURFACE_OFFSET),
-                ],
-                // Reversed-Z: nearer is larger.
-                depth_compare: Some(vk::CompareOp::GREATER),
+                vertex_stride: VERTEX_STRIDE,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                depth_compare: Some(DEPTH_COMPARE),
             },
         )?;
         Ok(Self { pipeline, _pool: pool, set, layout, render_pass, views })
