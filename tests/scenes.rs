@@ -25,7 +25,15 @@ fn write_scene(dir: &Path, obj: Option<&str>, toml_body: Option<&str>) -> PathBu
 /// Loading fails with a message containing every piece of `expected`; the CLI exits non-zero with the same
 /// message, without panicking, and leaves no output behind.
 fn rejects(name: &str, obj: Option<&str>, toml_body: Option<&str>, expected: &[&str]) {
+    rejects_with(name, obj, toml_body, &[], expected);
+}
+
+/// [`rejects`] with `extra` files (name, contents) beside the scene.
+fn rejects_with(name: &str, obj: Option<&str>, toml_body: Option<&str>, extra: &[(&str, &str)], expected: &[&str]) {
     let dir = common::scratch(name);
+    for (file, contents) in extra {
+        std::fs::write(dir.join(file), contents).unwrap();
+    }
     let scene = write_scene(&dir, obj, toml_body);
     let message = format!("{:#}", Scene::load(&scene).err().unwrap_or_else(|| panic!("{name}: loaded")));
     for piece in expected {
@@ -78,6 +86,22 @@ fn nan_vertex_names_its_line() {
 #[test]
 fn face_index_out_of_range_names_its_line() {
     rejects("bad_index", Some("v 0 0 0\nv 1 0 0\nf 1 2 7\n"), None, &["mesh.obj:3", "index 7"]);
+}
+
+/// Every MTL statement the parser would reject is reported with its line, never taken for "no materials".
+#[test]
+fn bad_mtl_lines_name_their_line() {
+    let obj = format!("mtllib m.mtl\nusemtl a\n{QUAD}");
+    for (name, bad, expected) in [
+        ("mtl_kd_short", "Kd 1 1", "'Kd' needs 3"),
+        ("mtl_ns", "Ns shiny", "'Ns' needs a number"),
+        ("mtl_illum", "illum two", "'illum' needs"),
+        ("mtl_newmtl", "newmtl", "'newmtl' needs a material name"),
+        ("mtl_map", "map_Kd", "'map_Kd' needs a file name"),
+    ] {
+        let mtl = format!("# materials\nnewmtl a\n{bad}\nKd 0.5 0.5 0.5\n");
+        rejects_with(name, Some(&obj), None, &[("m.mtl", &mtl)], &["m.mtl:3", expected]);
+    }
 }
 
 #[test]

@@ -283,22 +283,45 @@ fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<
     };
     let text = std::fs::read_to_string(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
     let checked = check_mtl(&path, &text)?;
-    Ok(tobj::load_mtl_buf(&mut checked.as_bytes()))
+    // `check_mtl` rejects everything tobj would; a parse error here must still not pass for "no materials".
+    let materials =
+        tobj::load_mtl_buf(&mut checked.as_bytes()).map_err(|e| error(&path, None, format!("material parser: {e}")))?;
+    Ok(Ok(materials))
 }
 
-/// Strips `# comments` and checks the colour statements this renderer reads (`Kd`, `Ke`).
+/// Strips `# comments` and checks, with the line, every statement `tobj` would reject (it reports no line,
+/// and its colour parser panics on fewer than three values): colours are 3 finite non-negative numbers,
+/// `Ns`/`Ni`/`d` a number, `illum` a small integer, `newmtl` and the texture maps a name.
 fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
     let mut out = String::with_capacity(text.len());
     for (index, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
         let mut words = line.split_whitespace();
-        if let Some(keyword @ ("Kd" | "Ke" | "Ka" | "Ks")) = words.next() {
-            let args: Vec<&str> = words.collect();
-            let values = parse_numbers(&args)
-                .map_err(|bad| error(path, Some(index + 1), format!("'{keyword}' value '{bad}' is not a number")))?;
-            if values.len() != 3 || values.iter().any(|v| !v.is_finite() || *v < 0.0) {
-                return Err(error(path, Some(index + 1), format!("'{keyword}' needs 3 finite non-negative numbers")));
+        let keyword = words.next().unwrap_or("");
+        let args: Vec<&str> = words.collect();
+        let err = |message: String| error(path, Some(index + 1), message);
+        match keyword {
+            "Kd" | "Ke" | "Ka" | "Ks" => {
+                let values =
+                    parse_numbers(&args).map_err(|bad| err(format!("'{keyword}' value '{bad}' is not a number")))?;
+                if values.len() != 3 || values.iter().any(|v| !v.is_finite() || *v < 0.0) {
+                    return Err(err(format!("'{keyword}' needs 3 finite non-negative numbers")));
+                }
             }
+            "Ns" | "Ni" | "d" if args.first().and_then(|a| a.parse::<f32>().ok()).is_none_or(|v| !v.is_finite()) => {
+                return Err(err(format!("'{keyword}' needs a number")));
+            }
+            "illum" if args.first().and_then(|a| a.parse::<u8>().ok()).is_none() => {
+                return Err(err("'illum' needs an illumination model number (0 to 10)".into()));
+            }
+            "newmtl" | "map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns" | "map_ns" | "map_NS"
+            | "bump" | "map_d"
+                if args.is_empty() =>
+            {
+                let what = if keyword == "newmtl" { "a material name" } else { "a file name" };
+                return Err(err(format!("'{keyword}' needs {what}")));
+            }
+            _ => {}
         }
         out.push_str(line);
         out.push('\n');
