@@ -111,7 +111,14 @@ fn empty_mesh_is_an_error() {
 
 #[test]
 fn only_degenerate_triangles_is_an_empty_mesh() {
-    rejects("degenerate", Some("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), None, &["mesh.obj", "no triangles"]);
+    rejects("degenerate", Some("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), None, &["mesh.obj", "(1 degenerate)"]);
+}
+
+/// Two small triangles 6e19 apart: each is fine, but the scene's diagonal overflows f32.
+#[test]
+fn mesh_too_large_for_f32_is_an_error() {
+    let obj = "v -3e19 0 0\nv -3e19 1 0\nv -3e19 0 1\nv 3e19 0 0\nv 3e19 1 0\nv 3e19 0 1\nf 1 2 3\nf 4 5 6\n";
+    rejects("too_large", Some(obj), None, &["mesh.obj", "too large for 32-bit floats"]);
 }
 
 #[test]

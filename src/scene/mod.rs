@@ -82,11 +82,22 @@ impl Mesh {
         if degenerate > 0 {
             warnings.push(format!("dropped {degenerate} degenerate (zero-area) triangle(s)"));
         }
-        ensure!(!triangles.is_empty(), "the mesh contains no triangles");
+        ensure!(
+            !triangles.is_empty(),
+            "the mesh contains no triangles{}",
+            if degenerate > 0 { format!(" of non-zero area ({degenerate} degenerate)") } else { String::new() }
+        );
         let mut bounds = Aabb::EMPTY;
         for t in &triangles {
             t.v.iter().for_each(|&p| bounds.grow(p));
         }
+        // Offsets and near planes are fractions of the diagonal: it must be a finite f32.
+        ensure!(
+            bounds.diagonal().is_finite(),
+            "the mesh spans {} to {}, too large for 32-bit floats; scale it down",
+            bounds.min,
+            bounds.max
+        );
         Ok(Self { triangles, surfaces, materials, bounds })
     }
 
