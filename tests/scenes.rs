@@ -58,6 +58,12 @@ fn unknown_toml_key_is_an_error() {
 }
 
 #[test]
+fn bad_render_table_names_the_file() {
+    let body = format!("mesh = \"mesh.obj\"\n{CAMERA}[render]\ntile = 12\n");
+    rejects("bad_render_table", Some(QUAD), Some(&body), &["scene.toml: [render]", "power of two"]);
+}
+
+#[test]
 fn camera_looking_along_up_is_an_error() {
     let body = "mesh = \"mesh.obj\"\n[camera]\neye = [0, 5, 0]\ntarget = [0, 0, 0]\nvfov_deg = 40\n[image]\nwidth = 8\nheight = 8\n";
     rejects("camera_up", Some(QUAD), Some(body), &["scene.toml", "up is parallel"]);

@@ -142,6 +142,9 @@ impl Scene {
             "{}: [image] width and height must be at least 1",
             path.display()
         );
+        // The `[render]` values are checked here, with the file named, even where a flag later overrides one.
+        crate::params::RenderParams::resolve(&file.render, &Default::default())
+            .with_context(|| format!("{}: [render]", path.display()))?;
         let mesh_path = file.mesh_path(path);
         let obj = obj::load(&mesh_path)?;
         let mut warnings = obj.warnings;
