@@ -126,3 +126,21 @@ fn bench_writes_its_report_table_csv_and_plot() {
     let plot = std::fs::read_to_string(&svg).unwrap();
     assert!(plot.starts_with("<svg") && plot.contains("layered") && plot.contains("raw fill"));
 }
+
+#[test]
+fn bad_bench_arguments_are_clear_errors() {
+    let dir = common::scratch("bench_bad");
+    let (png, missing) = (dir.join("plot.png"), dir.join("missing/b.json"));
+    for (flags, expected) in [
+        (&["--plot", png.to_str().unwrap()][..], "expected a .svg file name"),
+        (&["--json", missing.to_str().unwrap()], "does not exist"),
+        (&["--sizes", "0"], "--sensor-size"),
+        (&["--sensors", "0"], "--sensors"),
+        (&["--strategies", "warp"], "warp"),
+    ] {
+        let mut args = vec!["bench", "--repeat", "1"];
+        args.extend_from_slice(flags);
+        common::expect_failure(&args, expected);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "{flags:?} wrote a file");
+    }
+}

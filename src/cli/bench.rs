@@ -50,6 +50,9 @@ pub struct BenchArgs {
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
     ensure!(args.sensors >= 1 && args.repeat >= 1, "--sensors and --repeat must be at least 1");
     ensure!(!args.sizes.is_empty(), "--sizes needs at least one size");
+    if let Some(plot) = &args.plot {
+        atomic::check_extension(plot, "svg")?;
+    }
     for path in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
         atomic::check_writable(path)?;
     }
