@@ -97,4 +97,8 @@ fn bad_metrics_arguments_are_clear_errors() {
         common::expect_failure(&args, expected);
         assert!(!dir.join("metrics.json").exists());
     }
+    let file = common::scratch("metrics_bad_file").join("not-a-dir");
+    std::fs::write(&file, "x").unwrap();
+    common::expect_failure(&["metrics", "--quick", "-o", file.to_str().unwrap()], "is not a directory");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
 }
