@@ -10,20 +10,19 @@ use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{LayerFramebuffer, MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::image::ImageView;
 use crate::vk::{Device, Framebuffer, Image};
 
 pub struct Layered {
     // Field order is drop order: framebuffers before the images they view.
     framebuffer: Framebuffer,
     /// A framebuffer over the first layers only, for a smaller batch (so unused layers are not cleared).
-    partial: Option<(u32, Framebuffer, ImageView, ImageView)>,
+    partial: Option<(u32, LayerFramebuffer)>,
     pipeline: SensorPipeline,
     images: MapImages,
     layouts: Vec<ViewLayout>,
@@ -58,18 +57,15 @@ impl Layered {
         if count != self.capacity && self.partial.as_ref().is_none_or(|p| p.0 != count) {
             // The previous partial framebuffer's batch has completed (sense waits): replacing it is safe.
             let layers = count * self.desc.layers();
-            let color = self.images.maps.layer_view(0, layers)?;
-            let depth = self.images.depth.layer_view(0, layers)?;
-            let extent = self.images.maps.extent();
-            let fb = Framebuffer::new(device, &self.pipeline.render_pass, &[color.raw, depth.raw], extent, layers)?;
-            self.partial = Some((count, fb, color, depth));
+            let fb = self.images.layer_framebuffer(device, &self.pipeline.render_pass, (0, layers), layers)?;
+            self.partial = Some((count, fb));
         }
         Ok(())
     }
 
     fn framebuffer(&self, count: u32) -> &Framebuffer {
         match &self.partial {
-            Some((n, fb, ..)) if *n == count && count != self.capacity => fb,
+            Some((n, fb)) if *n == count && count != self.capacity => &fb.framebuffer,
             _ => &self.framebuffer,
         }
     }

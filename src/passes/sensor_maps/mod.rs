@@ -34,9 +34,10 @@ use crate::sensors::SensorKind;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::ViewLayout;
 use crate::shaders;
+use crate::vk::image::ImageView;
 use crate::vk::{
-    Buffer, DescriptorPool, Device, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass, SetWriter,
-    barrier,
+    Buffer, DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass,
+    SetWriter, barrier,
 };
 
 /// Texel format of the sensor maps: half floats hold `Ck` to 3 significant digits up to 65504, ample for
@@ -207,12 +208,36 @@ impl MapImages {
         Ok(Self { maps, depth })
     }
 
+    /// A framebuffer over layers `first..first + count` of the maps and depth. `framebuffer_layers` is
+    /// `count` for layered rendering, 1 for multiview (whose view mask addresses the layers).
+    fn layer_framebuffer(
+        &self,
+        device: &Arc<Device>,
+        render_pass: &RenderPass,
+        (first, count): (u32, u32),
+        framebuffer_layers: u32,
+    ) -> Result<LayerFramebuffer> {
+        let color = self.maps.layer_view(first, count)?;
+        let depth = self.depth.layer_view(first, count)?;
+        let extent = self.maps.extent();
+        let framebuffer = Framebuffer::new(device, render_pass, &[color.raw, depth.raw], extent, framebuffer_layers)?;
+        Ok(LayerFramebuffer { framebuffer, _color: color, _depth: depth })
+    }
+
     fn clears(background: Vec3) -> [vk::ClearValue; 2] {
         [
             vk::ClearValue { color: vk::ClearColorValue { float32: background.extend(1.0).to_array() } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ]
     }
+}
+
+/// A framebuffer over some layers of [`MapImages`], owning the views it was made from.
+struct LayerFramebuffer {
+    // Field order is drop order: the framebuffer before the views it refers to.
+    framebuffer: Framebuffer,
+    _color: ImageView,
+    _depth: ImageView,
 }
 
 /// A sensor pipeline: the render pass, the views buffer, and the pipeline drawing the scene into them.

@@ -18,18 +18,17 @@ use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{LayerFramebuffer, MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush};
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::image::ImageView;
-use crate::vk::{Device, Framebuffer, Image};
+use crate::vk::{Device, Image};
 
 pub struct Multiview {
     // Field order is drop order: framebuffers before the views and images they use.
-    framebuffers: Vec<(Framebuffer, ImageView, ImageView)>,
+    framebuffers: Vec<LayerFramebuffer>,
     pipeline: SensorPipeline,
     images: MapImages,
     /// For each layer of a sensor, the views that draw into it, in draw order.
@@ -59,15 +58,9 @@ impl Multiview {
         let max_views = (groups * group_layers) as usize * draws;
         let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_MULTIVIEW_VERT, view_mask, max_views)?;
         let images = MapImages::new(device, desc.rd, desc.rd, groups * group_layers)?;
-        let extent = images.maps.extent();
+        // Multiview framebuffers have one layer; the view mask addresses the attachments' layers.
         let framebuffers = (0..groups)
-            .map(|g| {
-                let color = images.maps.layer_view(g * group_layers, group_layers)?;
-                let depth = images.depth.layer_view(g * group_layers, group_layers)?;
-                // Multiview framebuffers have one layer; the view mask addresses the attachments' layers.
-                let fb = Framebuffer::new(device, &pipeline.render_pass, &[color.raw, depth.raw], extent, 1)?;
-                Ok((fb, color, depth))
-            })
+            .map(|g| images.layer_framebuffer(device, &pipeline.render_pass, (g * group_layers, group_layers), 1))
             .collect::<Result<Vec<_>>>()?;
         Ok(Self { framebuffers, pipeline, images, per_layer, desc, group_layers, group_sensors })
     }
@@ -122,7 +115,7 @@ impl Strategy for Multiview {
         let clears = MapImages::clears(ctx.background);
         device.submit_and_wait(|cmd| {
             for g in 0..groups {
-                self.framebuffers[g as usize].0.begin(cmd, &pipeline.render_pass, &clears);
+                self.framebuffers[g as usize].framebuffer.begin(cmd, &pipeline.render_pass, &clears);
                 pipeline.bind(device, cmd, ctx.scene);
                 for d in 0..draws {
                     let push =

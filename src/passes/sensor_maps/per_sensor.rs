@@ -7,18 +7,17 @@ use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{LayerFramebuffer, MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::image::ImageView;
-use crate::vk::{Device, Framebuffer, Image};
+use crate::vk::{Device, Image};
 
 pub struct PerSensor {
     // Field order is drop order: framebuffers before the views and images they use.
-    framebuffers: Vec<(Framebuffer, ImageView, ImageView)>,
+    framebuffers: Vec<LayerFramebuffer>,
     pipeline: SensorPipeline,
     images: MapImages,
     layouts: Vec<ViewLayout>,
@@ -37,14 +36,8 @@ impl PerSensor {
         let pipeline =
             SensorPipeline::new(device, scene, shaders::SENSOR_LAYERED_VERT, 0, (capacity as usize) * layouts.len())?;
         let images = MapImages::new(device, desc.rd, desc.rd, capacity * layers)?;
-        let extent = images.maps.extent();
         let framebuffers = (0..capacity)
-            .map(|i| {
-                let color = images.maps.layer_view(i * layers, layers)?;
-                let depth = images.depth.layer_view(i * layers, layers)?;
-                let fb = Framebuffer::new(device, &pipeline.render_pass, &[color.raw, depth.raw], extent, layers)?;
-                Ok((fb, color, depth))
-            })
+            .map(|i| images.layer_framebuffer(device, &pipeline.render_pass, (i * layers, layers), layers))
             .collect::<Result<Vec<_>>>()?;
         Ok(Self { framebuffers, pipeline, images, layouts, desc, one_submission })
     }
@@ -71,7 +64,7 @@ impl Strategy for PerSensor {
         let clears = MapImages::clears(ctx.background);
         // Sensor i: its own framebuffer, its views, gl_Layer relative to its first layer.
         let record_sensor = |cmd, i: u32| {
-            self.framebuffers[i as usize].0.begin(cmd, &pipeline.render_pass, &clears);
+            self.framebuffers[i as usize].framebuffer.begin(cmd, &pipeline.render_pass, &clears);
             pipeline.bind(device, cmd, ctx.scene);
             let push = SensorPush { epsilon: ctx.epsilon, layer_base: i * layers, ..Default::default() };
             pipeline.draw(device, cmd, ctx.scene, &push, per_sensor, i * per_sensor);
