@@ -6,8 +6,6 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
 
-use crate::scene::Mesh;
-
 /// One vertex of the triangle soup (binding 0; attributes at the offsets below). Three per triangle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -107,19 +105,6 @@ pub mod radiance_state {
     pub const NONE: f32 = 0.0;
     pub const SENSED: f32 = 1.0;
     pub const INTERPOLATED: f32 = 2.0;
-}
-
-pub fn vertices(mesh: &Mesh) -> Vec<Vertex> {
-    mesh.triangles.iter().flat_map(|t| t.v.map(|p| Vertex { position: p.to_array(), surface: t.surface })).collect()
-}
-
-pub fn surfaces(mesh: &Mesh) -> Vec<GpuSurface> {
-    std::iter::once(GpuSurface::default())
-        .chain((1..=mesh.surfaces.len() as u32).map(|id| {
-            let m = mesh.material_of(id);
-            GpuSurface { kd: m.kd.extend(0.0), ke: m.ke.extend(if m.is_emitter() { 1.0 } else { 0.0 }) }
-        }))
-        .collect()
 }
 
 impl GpuSensorView {

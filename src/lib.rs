@@ -13,6 +13,7 @@
 //! - [`output`]: EXR and PNG writing, always atomic.
 
 pub mod bench;
+pub mod gbuffer;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod metrics;

@@ -11,11 +11,12 @@ use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
+use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
 use crate::params::{EstimatorParams, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
-use crate::passes::gbuffer::{self, GBuffer, GBufferData, GBufferPass};
+use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::InterpolatePass;
 use crate::passes::reduce::ReducePass;
 use crate::passes::sensor_maps::{self, SenseContext, Strategy, StrategyDesc, StrategyKind};

@@ -3,8 +3,9 @@
 mod common;
 
 use glam::Vec4;
+use sensorlight::gbuffer::GBufferData;
 use sensorlight::gpu_scene::GpuScene;
-use sensorlight::passes::gbuffer::{self, GBufferData, GBufferPass};
+use sensorlight::passes::gbuffer::{self, GBufferPass};
 use sensorlight::reference::{bvh::Bvh, gbuffer as cpu_gbuffer};
 use sensorlight::scene::{ImageSize, NO_SURFACE, Scene};
 

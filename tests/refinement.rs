@@ -3,9 +3,9 @@
 mod common;
 
 use glam::{Vec3, Vec4};
+use sensorlight::gbuffer::GBufferData;
 use sensorlight::gpu_types::GpuQuad;
 use sensorlight::gpu_types::radiance_state::{INTERPOLATED, SENSED};
-use sensorlight::passes::gbuffer::GBufferData;
 use sensorlight::passes::interpolate::InterpolatePass;
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};

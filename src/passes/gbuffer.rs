@@ -8,9 +8,10 @@ use ash::vk;
 use glam::Vec4;
 
 use super::{DEPTH_COMPARE, DEPTH_FORMAT};
+use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GBufferPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
-use crate::scene::{Camera, ImageSize, SurfaceId};
+use crate::scene::{Camera, ImageSize};
 use crate::shaders;
 use crate::vk::{
     DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass,
@@ -49,21 +50,6 @@ pub struct GBuffer {
     pub surface: Image,
     _depth: Image,
     pub size: ImageSize,
-}
-
-/// The G-buffer on the host, row-major from the top-left pixel.
-#[derive(Clone, Debug)]
-pub struct GBufferData {
-    pub size: ImageSize,
-    /// xyz world position; w = 1 where a surface is seen, 0 on the background.
-    pub position: Vec<Vec4>,
-    /// Unit normal turned towards the camera; w = 1 where the front side is seen.
-    pub normal: Vec<Vec4>,
-    pub albedo: Vec<Vec4>,
-    /// `Ke` where an emitter's front side is seen, else 0.
-    pub emission: Vec<Vec4>,
-    /// Surface id; [`crate::scene::NO_SURFACE`] on the background.
-    pub surface: Vec<SurfaceId>,
 }
 
 impl GBufferPass {

@@ -3,7 +3,8 @@
 
 use glam::Vec3;
 
-use super::ray::{Ray, RayShear};
+use super::ray::RayShear;
+use crate::scene::Ray;
 use crate::scene::{Aabb, Triangle};
 
 const BINS: usize = 16;

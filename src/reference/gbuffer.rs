@@ -5,7 +5,7 @@ use glam::Vec4;
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
-use crate::passes::gbuffer::GBufferData;
+use crate::gbuffer::GBufferData;
 use crate::scene::{ImageSize, NO_SURFACE, Scene};
 
 pub fn cast(scene: &Scene, bvh: &Bvh, size: ImageSize) -> GBufferData {

@@ -18,11 +18,10 @@ use rayon::prelude::*;
 
 use super::bvh::Bvh;
 use super::gbuffer;
-use super::ray::Ray;
 use super::sampling::{ScrambledSobol, cosine_hemisphere, hash};
+use crate::gbuffer::GBufferData;
 use crate::params::EstimatorParams;
-use crate::passes::gbuffer::GBufferData;
-use crate::scene::{ImageSize, Scene};
+use crate::scene::{ImageSize, Ray, Scene};
 use crate::sensors::{SensorKind, frame};
 
 /// Independent scrambles per point; their spread measures the noise.

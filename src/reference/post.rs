@@ -3,7 +3,7 @@
 
 use glam::{Vec3, Vec4};
 
-use crate::passes::gbuffer::GBufferData;
+use crate::gbuffer::GBufferData;
 use crate::scene::{ImageSize, NO_SURFACE, SurfaceId};
 
 /// Gaussian of radius `radius` (σ = radius/2) over `source`, only over pixels of the centre's surface id,

@@ -1,24 +1,9 @@
-//! Rays and the watertight ray–triangle test of Woop, Benthin and Wald (JCGT 2013): no ray slips through the
+//! The watertight ray–triangle test of Woop, Benthin and Wald (JCGT 2013): no ray slips through the
 //! shared edge of two triangles, which matters for sensors looking at the seams of a closed room.
 
 use glam::Vec3;
 
-#[derive(Clone, Copy, Debug)]
-pub struct Ray {
-    pub origin: Vec3,
-    /// Need not be unit length; `t` is measured in multiples of it.
-    pub dir: Vec3,
-}
-
-impl Ray {
-    pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Self { origin, dir }
-    }
-
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.origin + self.dir * t
-    }
-}
+use crate::scene::Ray;
 
 /// Per-ray constants of the watertight test: the axis permutation and shear that map the ray onto +z.
 #[derive(Clone, Copy, Debug)]

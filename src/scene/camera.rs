@@ -5,7 +5,7 @@
 use anyhow::{Result, ensure};
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::reference::ray::Ray;
+use super::Ray;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {

@@ -5,6 +5,7 @@ pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod obj;
+pub mod ray;
 pub mod surfaces;
 
 use std::path::{Path, PathBuf};
@@ -15,6 +16,7 @@ use glam::Vec3;
 pub use camera::Camera;
 pub use file::RenderDefaults;
 pub use obj::Material;
+pub use ray::Ray;
 
 /// Surface ids are 1-based; 0 marks "no surface" (the background) in the G-buffer.
 pub type SurfaceId = u32;

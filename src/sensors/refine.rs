@@ -18,8 +18,8 @@
 
 use glam::{Vec3, Vec4};
 
+use crate::gbuffer::GBufferData;
 use crate::gpu_types::GpuQuad;
-use crate::passes::gbuffer::GBufferData;
 use crate::scene::{NO_SURFACE, SurfaceId};
 
 /// Corner normals agree when every pair is within this angle.
