@@ -1,7 +1,8 @@
 #version 460
 // Reduction (DESIGN.md §3 step 4): one workgroup per sensor computes R = (1/pi) * sum(Ck * w) over the
 // sensor's layers, with w the exact projected solid angle of each texel (src/sensors/weights.rs), and
-// writes it into the radiance map at the sensor's pixel with w = STATE_SENSED.
+// writes it into the radiance map at the sensor's pixel with w = STATE_SENSED, and into the batch's
+// results (one vec4 per sensor, host-visible) so that the refinement reads back only what it sensed.
 //
 // The 8 x 8 threads walk each layer in 8 x 8 blocks (no integer division in the loop: CPU drivers
 // have no vector divide), each summing its share (3072 texels of a hemicube at rd 256); the workgroup then
@@ -17,12 +18,13 @@ layout(set = 0, binding = 0, rgba16f) uniform readonly image2DArray sensor_maps;
 layout(std430, set = 0, binding = 1) readonly buffer Weights { float weights[]; };  // [layer][row][col]
 layout(std430, set = 0, binding = 2) readonly buffer Pixels { uint pixels[]; };    // pixel of each sensor
 layout(std430, set = 0, binding = 3) buffer Radiance { vec4 radiance[]; };         // the radiance map
+layout(std430, set = 0, binding = 4) writeonly buffer Results { vec4 results[]; }; // R of each sensor
 layout(push_constant) uniform Push { ReducePush push; };
 
 shared vec3 partial[64];
 
 void main() {
-    uint sensor = push.first_sensor + gl_WorkGroupID.x;
+    uint sensor = gl_WorkGroupID.x;
     uint lid = gl_LocalInvocationIndex;
     uvec2 thread = gl_LocalInvocationID.xy;
     uint rd = push.rd;
@@ -55,6 +57,8 @@ void main() {
         barrier();
     }
     if (lid == 0u) {
-        radiance[pixels[sensor]] = vec4(partial[0] / PI, STATE_SENSED);
+        vec4 r = vec4(partial[0] / PI, STATE_SENSED);
+        radiance[pixels[sensor]] = r;
+        results[sensor] = r;
     }
 }

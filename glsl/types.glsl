@@ -30,10 +30,10 @@ struct SensorPush {
 };
 
 struct ReducePush {
-    uint rd;            // sensor map side
-    uint layers;        // layers per sensor
-    uint first_sensor;   // index into the batch's pixel list of workgroup 0's sensor
+    uint rd;             // sensor map side
+    uint layers;         // layers per sensor
     uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
+    uint _pad;
 };
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).

@@ -9,12 +9,12 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::params::EstimatorParams;
+use crate::params::{EstimatorParams, FrameParams};
 use crate::passes::fill::FillPass;
-use crate::passes::sensor_maps::{self, StrategyDesc, StrategyKind};
-use crate::renderer::{Renderer, default_memory_budget};
+use crate::passes::sensor_maps::{self, StrategyDesc};
+use crate::renderer::{self, DEFAULT_IN_FLIGHT, Renderer, default_memory_budget, probe_pixels};
 use crate::scene::{ImageSize, Scene};
-use crate::strategy::{self, CheckResult, Probe};
+use crate::strategy::{CheckResult, StrategyKind};
 use crate::vk::Device;
 
 pub struct BenchConfig {
@@ -74,6 +74,15 @@ pub struct BenchReport {
     pub sizes: Vec<SizeSummary>,
 }
 
+/// What the benchmark is doing, for progress displays.
+#[derive(Clone, Debug)]
+pub enum BenchEvent {
+    /// A strategy's self-check ran.
+    Checked { strategy: StrategyKind, result: CheckResult },
+    /// A timed round at sensor size `rd` is done.
+    Round { rd: u32, round: usize, rounds: usize },
+}
+
 fn median(values: &[f64]) -> f64 {
     let mut v = values.to_vec();
     v.sort_by(f64::total_cmp);
@@ -81,12 +90,15 @@ fn median(values: &[f64]) -> f64 {
     if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
-/// Runs the benchmark; `log` receives progress lines.
-pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(String)) -> Result<BenchReport> {
+/// Runs the benchmark; `events` hears of each self-check and each timed round.
+pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(BenchEvent)) -> Result<BenchReport> {
     let sensor = config.estimator.sensor;
-    let budget = default_memory_budget(device);
+    let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
+    let max_side = device.adapter.limits.max_image_dimension_2d;
     for &rd in &config.sizes {
-        sensor.check_size(rd, device.adapter.limits.max_image_dimension_2d)?;
+        if let Some(problem) = sensor.size_problem(rd, max_side) {
+            return Err(crate::params::ParamError::new(crate::params::Param::SensorSize, problem).into());
+        }
     }
     let mut checks = Vec::new();
     let mut skipped = Vec::new();
@@ -97,8 +109,8 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(Strin
             skipped.push((kind, format!("unsupported: {why}")));
             continue;
         }
-        let check = strategy::self_check(device, sensor, kind)?;
-        log(format!("self-check {kind}: max difference {:.2e}", check.max_difference));
+        let check = renderer::self_check(device, sensor, kind)?;
+        events(BenchEvent::Checked { strategy: kind, result: check });
         checks.push((kind, check));
         if check.passed {
             strategies.push(kind);
@@ -110,37 +122,49 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(Strin
         }
     }
 
-    let probe = Probe::on(config.scene.clone(), config.size, config.sensors, config.estimator);
-    let n = probe.pixels.len();
+    let frame = FrameParams {
+        epsilon: config.estimator.epsilon,
+        background: config.estimator.background,
+        tile: 1,
+        dradiance: 0.0,
+        filter_radius: 0,
+    };
     let layers = sensor.layers() as u64;
+    let mut pixels = Vec::new();
     let mut measurements = Vec::new();
     let mut sizes = Vec::new();
     for &rd in &config.sizes {
         let mut renderers = strategies
             .iter()
-            .map(|&kind| Renderer::new(device, &probe.scene, sensor, rd, Some(budget), kind))
+            .map(|&kind| Renderer::builder(device, &config.scene, sensor, rd).build_unchecked(kind))
             .collect::<Result<Vec<_>>>()?;
+        if pixels.is_empty()
+            && let Some(r) = renderers.first()
+        {
+            pixels = probe_pixels(&r.gbuffer(config.size)?.surface, config.sensors);
+        }
+        let n = pixels.len();
         let fill_layers = (n as u64 * layers).min(device.adapter.limits.max_framebuffer_layers as u64) as u32;
         let fill = FillPass::new(device, rd, fill_layers)?;
         // Warm-up: pipelines compile at first use.
         for r in &mut renderers {
-            r.radiance_at(&probe.scene, probe.size, &probe.pixels, &config.estimator)?;
+            r.sense_at(config.size, &pixels, &frame)?;
         }
         fill.run(device)?;
         let mut times = vec![Vec::new(); renderers.len()];
         let (mut fill_rates, mut reductions) = (Vec::new(), Vec::new());
         for round in 0..config.repeat {
-            log(format!("rd {rd}: round {}/{}", round + 1, config.repeat));
             for (i, r) in renderers.iter_mut().enumerate() {
-                let (_, t) = r.radiance_at(&probe.scene, probe.size, &probe.pixels, &config.estimator)?;
+                let (_, t) = r.sense_at(config.size, &pixels, &frame)?;
                 times[i].push(t.as_secs_f64());
             }
             let t = fill.run(device)?;
             fill_rates.push(fill_layers as f64 * (rd as f64).powi(2) / t.as_secs_f64());
-            if let Some(r) = renderers.iter().find(|r| r.strategy() != StrategyKind::Atlas) {
+            if let Some(r) = renderers.iter_mut().find(|r| r.strategy() != StrategyKind::Atlas) {
                 let count = (n as u32).min(r.batch_size());
-                reductions.push(r.reduction_only(count)?.as_secs_f64() / count as f64);
+                reductions.push(r.time_reduction(count)?.as_secs_f64() / count as f64);
             }
+            events(BenchEvent::Round { rd, round: round + 1, rounds: config.repeat });
         }
         let fill_rate = median(&fill_rates);
         let texels_per_sensor = layers as f64 * (rd as f64).powi(2);
@@ -180,7 +204,7 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, log: &mut dyn FnMut(Strin
         scene: config.scene.path.display().to_string(),
         triangles: config.scene.mesh.triangles.len(),
         sensor: sensor.to_string(),
-        sensors: n,
+        sensors: pixels.len(),
         repeat: config.repeat,
         checks,
         skipped,

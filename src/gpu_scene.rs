@@ -1,5 +1,6 @@
 //! The scene as the GPU passes read it: a vertex buffer (triangle soup), per-triangle normals and the
-//! per-surface materials. Uploaded once per render and shared by the G-buffer and sensor passes.
+//! per-surface materials. Uploaded once per renderer and shared (hence `Arc`) by the G-buffer and sensor
+//! passes, each of which keeps what it draws with alive.
 
 use std::sync::Arc;
 
@@ -12,21 +13,15 @@ use crate::scene::{Mesh, Scene};
 use crate::vk::{Buffer, Device};
 
 pub struct GpuScene {
-    pub vertices: Buffer,
+    pub vertices: Arc<Buffer>,
     pub vertex_count: u32,
     /// One `vec4` per triangle: the front normal.
-    pub normals: Buffer,
+    pub normals: Arc<Buffer>,
     /// `GpuSurface` per surface id (entry 0 unused).
-    pub surfaces: Buffer,
+    pub surfaces: Arc<Buffer>,
 }
 
 impl GpuScene {
-    /// Binds the triangle soup as vertex buffer 0.
-    pub fn bind_vertices(&self, device: &Device, cmd: vk::CommandBuffer) {
-        // SAFETY: recording state; the scene outlives the passes that draw it.
-        unsafe { device.raw.cmd_bind_vertex_buffers(cmd, 0, &[self.vertices.raw], &[0]) };
-    }
-
     pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
         let mesh = &scene.mesh;
         let vertices = vertices(mesh);
@@ -34,9 +29,14 @@ impl GpuScene {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             vertex_count: vertices.len() as u32,
-            vertices: Buffer::upload(device, "vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER | storage)?,
-            normals: Buffer::upload(device, "triangle normals", &normals, storage)?,
-            surfaces: Buffer::upload(device, "surfaces", &surfaces(mesh), storage)?,
+            vertices: Arc::new(Buffer::upload(
+                device,
+                "vertices",
+                &vertices,
+                vk::BufferUsageFlags::VERTEX_BUFFER | storage,
+            )?),
+            normals: Arc::new(Buffer::upload(device, "triangle normals", &normals, storage)?),
+            surfaces: Arc::new(Buffer::upload(device, "surfaces", &surfaces(mesh), storage)?),
         })
     }
 }

@@ -60,7 +60,7 @@ pub struct SensorPush {
     pub _pad: [u32; 3],
 }
 
-/// Push constants of the reduction: which sensors of the batch, and the map geometry.
+/// Push constants of the reduction: the map geometry (workgroup i reduces sensor i of the batch).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ReducePush {
@@ -68,10 +68,9 @@ pub struct ReducePush {
     pub rd: u32,
     /// Layers per sensor (1 frustum, 3 hemicube).
     pub layers: u32,
-    /// Index into the batch's pixel list of workgroup 0's sensor.
-    pub first_sensor: u32,
     /// 0: sensor maps are layers of a 2D array. Otherwise tiles of one atlas with this many per row.
     pub atlas_columns: u32,
+    pub _pad: u32,
 }
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).

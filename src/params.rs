@@ -1,11 +1,180 @@
-//! The algorithm's parameters: one place for their defaults, ranges and checks. Precedence: command-line
-//! flag, then the scene file's `[render]` table, then the defaults below.
+//! The algorithm's parameters: one place for their defaults, ranges and checks. A value comes from a
+//! command-line flag, else the scene file's `[render]` table, else the default below; an error names the
+//! parameter as the user wrote it there (`--tile` on the command line, `[render] tile` in a scene file).
 
-use anyhow::{Result, ensure};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
 use glam::Vec3;
+use serde::Deserialize;
 
-use crate::scene::RenderDefaults;
 use crate::sensors::SensorKind;
+pub use crate::sensors::SensorShape;
+
+pub const DEFAULT_SENSOR: SensorShape = SensorShape::Hemicube;
+pub const DEFAULT_FOV_DEG: f32 = 135.0;
+pub const DEFAULT_EPSILON: f32 = 0.1;
+pub const DEFAULT_SENSOR_SIZE: u32 = 256;
+pub const DEFAULT_TILE: u32 = 16;
+pub const DEFAULT_DRADIANCE: f32 = 0.2;
+pub const DEFAULT_FILTER_RADIUS: u32 = 2;
+pub const DEFAULT_EXPOSURE: f32 = 0.0;
+
+/// A user-settable parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Param {
+    Sensor,
+    Fov,
+    Epsilon,
+    Background,
+    SensorSize,
+    Tile,
+    Dradiance,
+    FilterRadius,
+    Exposure,
+    Samples,
+}
+
+impl Param {
+    /// The command-line flag.
+    pub fn flag(self) -> &'static str {
+        match self {
+            Self::Sensor => "--sensor",
+            Self::Fov => "--fov",
+            Self::Epsilon => "--epsilon",
+            Self::Background => "--background",
+            Self::SensorSize => "--sensor-size",
+            Self::Tile => "--tile",
+            Self::Dradiance => "--dradiance",
+            Self::FilterRadius => "--filter-radius",
+            Self::Exposure => "--exposure",
+            Self::Samples => "--samples",
+        }
+    }
+
+    /// The key in a scene file's `[render]` table.
+    pub fn key(self) -> &'static str {
+        match self {
+            Self::Sensor => "sensor",
+            Self::Fov => "fov_deg",
+            Self::Epsilon => "epsilon",
+            Self::Background => "background",
+            Self::SensorSize => "sensor_size",
+            Self::Tile => "tile",
+            Self::Dradiance => "dradiance",
+            Self::FilterRadius => "filter_radius",
+            Self::Exposure => "exposure",
+            Self::Samples => "samples",
+        }
+    }
+}
+
+/// Where a parameter's value came from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Origin {
+    Flag,
+    SceneFile(PathBuf),
+    Default,
+}
+
+/// A parameter value out of its range, named as the user wrote it (once [`ParamError::origin`] is known).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub struct ParamError {
+    pub param: Param,
+    /// What is wrong, as a predicate: "must be a power of two (1, 2, 4, …), got 12".
+    pub problem: String,
+    /// `None` where the code that found the problem cannot know (e.g. a device limit checked by the
+    /// renderer): [`RenderParams::attribute`] fills it in.
+    pub origin: Option<Origin>,
+}
+
+impl ParamError {
+    pub fn new(param: Param, problem: impl Into<String>) -> Self {
+        Self { param, problem: problem.into(), origin: None }
+    }
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.origin {
+            Some(Origin::SceneFile(path)) => {
+                write!(f, "{}: [render] {} {}", path.display(), self.param.key(), self.problem)
+            }
+            _ => write!(f, "{} {}", self.param.flag(), self.problem),
+        }
+    }
+}
+
+/// Values set on the command line or in a scene file's `[render]` table; `None` falls back (flag → scene
+/// → default). The field names are the `[render]` keys.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Overrides {
+    pub sensor: Option<SensorShape>,
+    pub fov_deg: Option<f32>,
+    pub epsilon: Option<f32>,
+    /// Radiance of rays that leave the scene, linear RGB.
+    pub background: Option<[f32; 3]>,
+    pub sensor_size: Option<u32>,
+    pub tile: Option<u32>,
+    pub dradiance: Option<f32>,
+    pub filter_radius: Option<u32>,
+    pub exposure: Option<f32>,
+}
+
+impl Overrides {
+    /// The `[render]` table of the scene file `path` (empty when the file has none).
+    pub fn from_scene_table(path: &Path, table: &toml::Table) -> anyhow::Result<Self> {
+        Self::deserialize(toml::Value::Table(table.clone()))
+            .map_err(|e| anyhow::anyhow!("{}: [render]: {}", path.display(), e.message()))
+    }
+
+    /// Checks every value that is set against its range (ranges that depend on the device are checked when
+    /// the renderer is built); errors carry `origin`.
+    fn check(&self, origin: &Origin) -> Result<(), ParamError> {
+        let fail = |param, problem: String| Err(ParamError { param, problem, origin: Some(origin.clone()) });
+        if let Some(fov) = self.fov_deg
+            && !(fov.is_finite() && fov > 0.0 && fov < 180.0)
+        {
+            return fail(
+                Param::Fov,
+                format!("must lie strictly between 0 and 180 degrees (a perspective view cannot see 180°), got {fov}"),
+            );
+        }
+        if let Some(e) = self.epsilon
+            && !(e.is_finite() && e >= 0.0)
+        {
+            return fail(Param::Epsilon, format!("must be a finite number ≥ 0, got {e}"));
+        }
+        if let Some(b) = self.background
+            && !b.iter().all(|v| v.is_finite() && *v >= 0.0)
+        {
+            return fail(Param::Background, format!("must be finite and ≥ 0, got {b:?}"));
+        }
+        if let Some(rd) = self.sensor_size
+            && rd < 2
+        {
+            return fail(Param::SensorSize, format!("must be at least 2 texels, got {rd}"));
+        }
+        if let Some(tile) = self.tile
+            && !tile.is_power_of_two()
+        {
+            return fail(Param::Tile, format!("must be a power of two (1, 2, 4, …), got {tile}"));
+        }
+        if let Some(d) = self.dradiance
+            && !(d.is_finite() && d >= 0.0)
+        {
+            return fail(Param::Dradiance, format!("must be a finite number ≥ 0, got {d}"));
+        }
+        if let Some(x) = self.exposure
+            && !x.is_finite()
+        {
+            return fail(Param::Exposure, format!("must be finite, got {x}"));
+        }
+        Ok(())
+    }
+}
 
 /// What a sensor sees (DESIGN.md §1–2); shared by the GPU renderer and the CPU reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,13 +189,13 @@ pub struct EstimatorParams {
     pub background: Vec3,
 }
 
-/// The full set for `render`: the estimator plus the sensor map size, refinement and filter.
+/// What one render does with its sensors, beyond what they are (the renderer's construction settings):
+/// refinement, filter and the estimator's constants.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderParams {
-    pub estimator: EstimatorParams,
-    /// rd: sensor map side in texels, 2 …  the device's largest image side (even for hemicubes). Noise falls
-    /// and cost grows roughly with rd²; 64–256 typical (the paper: 256).
-    pub sensor_size: u32,
+pub struct FrameParams {
+    /// ε and the background (see [`EstimatorParams`]).
+    pub epsilon: f32,
+    pub background: Vec3,
     /// dt: initial grid step of the adaptive refinement (paper §III-G), a power of two ≥ 1; 16 typical.
     pub tile: u32,
     /// Largest relative variation of R between a quad's corners that is still interpolated; ≥ 0.
@@ -35,61 +204,103 @@ pub struct RenderParams {
     pub dradiance: f32,
     /// Radius in pixels of the id-constrained Gaussian filter (paper §III-H), σ = radius / 2; 0 = off.
     pub filter_radius: u32,
+}
+
+/// Everything `render` resolves from flags, the scene file and defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderParams {
+    pub estimator: EstimatorParams,
+    /// rd: sensor map side in texels, 2 … the device's largest image side (even for hemicubes). Noise falls
+    /// and cost grows roughly with rd²; 64–256 typical (the paper: 256).
+    pub sensor_size: u32,
+    pub tile: u32,
+    pub dradiance: f32,
+    pub filter_radius: u32,
     /// Exposure of the PNG preview in stops (the EXR is never scaled).
     pub exposure: f32,
-}
-
-pub const DEFAULT_SENSOR: &str = "hemicube";
-pub const DEFAULT_EPSILON: f32 = 0.1;
-pub const DEFAULT_SENSOR_SIZE: u32 = 256;
-pub const DEFAULT_TILE: u32 = 16;
-pub const DEFAULT_DRADIANCE: f32 = 0.2;
-pub const DEFAULT_FILTER_RADIUS: u32 = 2;
-
-/// Values given on the command line; `None` falls back to the scene file, then to the default.
-#[derive(Clone, Debug, Default)]
-pub struct Overrides {
-    pub sensor: Option<String>,
-    pub fov_deg: Option<f32>,
-    pub epsilon: Option<f32>,
-    pub background: Option<[f32; 3]>,
-    pub sensor_size: Option<u32>,
-    pub tile: Option<u32>,
-    pub dradiance: Option<f32>,
-    pub filter_radius: Option<u32>,
-    pub exposure: Option<f32>,
-}
-
-impl EstimatorParams {
-    pub fn resolve(scene: &RenderDefaults, cli: &Overrides) -> Result<Self> {
-        let name = cli.sensor.clone().or_else(|| scene.sensor.clone()).unwrap_or_else(|| DEFAULT_SENSOR.into());
-        let fov = cli.fov_deg.or(scene.fov_deg).unwrap_or(SensorKind::DEFAULT_FOV_DEG);
-        let epsilon = cli.epsilon.or(scene.epsilon).unwrap_or(DEFAULT_EPSILON);
-        let background = Vec3::from(cli.background.or(scene.background).unwrap_or([0.0; 3]));
-        ensure!(epsilon.is_finite() && epsilon >= 0.0, "--epsilon must be a finite number ≥ 0, got {epsilon}");
-        ensure!(
-            background.is_finite() && background.min_element() >= 0.0,
-            "--background must be finite and ≥ 0, got {background}"
-        );
-        Ok(Self { sensor: SensorKind::parse(&name, fov)?, epsilon, background })
-    }
+    /// Where each value that was set came from (absent: the default).
+    origins: BTreeMap<Param, Origin>,
 }
 
 impl RenderParams {
-    /// Resolves and checks everything that does not depend on the device (the sensor size's upper bound does:
-    /// see [`SensorKind::check_size`]).
-    pub fn resolve(scene: &RenderDefaults, cli: &Overrides) -> Result<Self> {
-        let estimator = EstimatorParams::resolve(scene, cli)?;
-        let sensor_size = cli.sensor_size.or(scene.sensor_size).unwrap_or(DEFAULT_SENSOR_SIZE);
-        let tile = cli.tile.or(scene.tile).unwrap_or(DEFAULT_TILE);
-        let dradiance = cli.dradiance.or(scene.dradiance).unwrap_or(DEFAULT_DRADIANCE);
-        let filter_radius = cli.filter_radius.or(scene.filter_radius).unwrap_or(DEFAULT_FILTER_RADIUS);
-        let exposure = cli.exposure.or(scene.exposure).unwrap_or(0.0);
-        ensure!(sensor_size >= 2, "--sensor-size must be at least 2 texels, got {sensor_size}");
-        ensure!(tile.is_power_of_two(), "--tile must be a power of two (1, 2, 4, …), got {tile}");
-        ensure!(dradiance.is_finite() && dradiance >= 0.0, "--dradiance must be a finite number ≥ 0, got {dradiance}");
-        ensure!(exposure.is_finite(), "--exposure must be finite");
-        Ok(Self { estimator, sensor_size, tile, dradiance, filter_radius, exposure })
+    /// Resolves flags over the scene file's `[render]` values (`scene`: its path and values) over the
+    /// defaults, and checks every value given, each with its origin (a bad value in the scene file is an
+    /// error even where a flag overrides it).
+    pub fn resolve(scene: Option<(&Path, &Overrides)>, flags: &Overrides) -> Result<Self, ParamError> {
+        let empty = Overrides::default();
+        let (scene_path, scene) = scene.map_or((None, &empty), |(p, o)| (Some(p), o));
+        let scene_origin = scene_path.map_or(Origin::Default, |p| Origin::SceneFile(p.to_owned()));
+        scene.check(&scene_origin)?;
+        flags.check(&Origin::Flag)?;
+
+        let mut origins = BTreeMap::new();
+        let mut pick = |param: Param, flag: bool, from_scene: bool| {
+            if flag {
+                origins.insert(param, Origin::Flag);
+            } else if from_scene {
+                origins.insert(param, scene_origin.clone());
+            }
+        };
+        macro_rules! resolve {
+            ($field:ident, $param:expr, $default:expr) => {{
+                pick($param, flags.$field.is_some(), scene.$field.is_some());
+                flags.$field.or(scene.$field).unwrap_or($default)
+            }};
+        }
+        let shape = resolve!(sensor, Param::Sensor, DEFAULT_SENSOR);
+        let fov = resolve!(fov_deg, Param::Fov, DEFAULT_FOV_DEG);
+        let epsilon = resolve!(epsilon, Param::Epsilon, DEFAULT_EPSILON);
+        let background = Vec3::from(resolve!(background, Param::Background, [0.0; 3]));
+        let sensor_size = resolve!(sensor_size, Param::SensorSize, DEFAULT_SENSOR_SIZE);
+        let tile = resolve!(tile, Param::Tile, DEFAULT_TILE);
+        let dradiance = resolve!(dradiance, Param::Dradiance, DEFAULT_DRADIANCE);
+        let filter_radius = resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS);
+        let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
+        let sensor = SensorKind::new(shape, fov);
+        let params = Self {
+            estimator: EstimatorParams { sensor, epsilon, background },
+            sensor_size,
+            tile,
+            dradiance,
+            filter_radius,
+            exposure,
+            origins,
+        };
+        if let Some(problem) = sensor.size_problem(sensor_size, u32::MAX) {
+            return Err(params.attribute(ParamError::new(Param::SensorSize, problem)));
+        }
+        Ok(params)
+    }
+
+    /// The per-render part.
+    pub fn frame(&self) -> FrameParams {
+        FrameParams {
+            epsilon: self.estimator.epsilon,
+            background: self.estimator.background,
+            tile: self.tile,
+            dradiance: self.dradiance,
+            filter_radius: self.filter_radius,
+        }
+    }
+
+    /// Where `param`'s value came from.
+    pub fn origin(&self, param: Param) -> Origin {
+        self.origins.get(&param).cloned().unwrap_or(Origin::Default)
+    }
+
+    /// `error` with the origin of its parameter's value, so that it names the flag or the scene file.
+    pub fn attribute(&self, mut error: ParamError) -> ParamError {
+        if error.origin.is_none() {
+            error.origin = Some(self.origin(error.param));
+        }
+        error
+    }
+}
+
+impl EstimatorParams {
+    /// The estimator part of [`RenderParams::resolve`].
+    pub fn resolve(scene: Option<(&Path, &Overrides)>, flags: &Overrides) -> Result<Self, ParamError> {
+        Ok(RenderParams::resolve(scene, flags)?.estimator)
     }
 }
 
@@ -98,29 +309,48 @@ mod tests {
     use super::*;
 
     #[test]
-    fn precedence_is_cli_then_scene_then_default() {
-        let scene = RenderDefaults { epsilon: Some(0.5), tile: Some(8), ..Default::default() };
-        let cli = Overrides { epsilon: Some(0.25), ..Default::default() };
-        let p = RenderParams::resolve(&scene, &cli).unwrap();
+    fn precedence_is_flag_then_scene_then_default() {
+        let scene = Overrides { epsilon: Some(0.5), tile: Some(8), ..Default::default() };
+        let flags = Overrides { epsilon: Some(0.25), ..Default::default() };
+        let path = Path::new("room.toml");
+        let p = RenderParams::resolve(Some((path, &scene)), &flags).unwrap();
         assert_eq!((p.estimator.epsilon, p.tile, p.sensor_size), (0.25, 8, DEFAULT_SENSOR_SIZE));
         assert_eq!(p.estimator.sensor, SensorKind::Hemicube);
+        assert_eq!(p.origin(Param::Epsilon), Origin::Flag);
+        assert_eq!(p.origin(Param::Tile), Origin::SceneFile(path.into()));
+        assert_eq!(p.origin(Param::SensorSize), Origin::Default);
     }
 
     #[test]
-    fn bad_values_are_rejected_with_the_flag_named() {
+    fn a_bad_value_is_named_as_a_flag_or_as_a_render_key() {
         let bad = [
-            Overrides { epsilon: Some(-0.1), ..Default::default() },
-            Overrides { tile: Some(12), ..Default::default() },
-            Overrides { sensor_size: Some(0), ..Default::default() },
-            Overrides { sensor: Some("frustum".into()), fov_deg: Some(180.0), ..Default::default() },
-            Overrides { sensor: Some("fisheye".into()), ..Default::default() },
-            Overrides { dradiance: Some(f32::NAN), ..Default::default() },
+            (Overrides { epsilon: Some(-0.1), ..Default::default() }, Param::Epsilon),
+            (Overrides { tile: Some(12), ..Default::default() }, Param::Tile),
+            (Overrides { sensor_size: Some(0), ..Default::default() }, Param::SensorSize),
+            (Overrides { sensor: Some(SensorShape::Frustum), fov_deg: Some(180.0), ..Default::default() }, Param::Fov),
+            (Overrides { dradiance: Some(f32::NAN), ..Default::default() }, Param::Dradiance),
+            (Overrides { sensor_size: Some(15), ..Default::default() }, Param::SensorSize),
         ];
-        for (cli, flag) in
-            bad.iter().zip(["--epsilon", "--tile", "--sensor-size", "--fov", "sensor kind", "--dradiance"])
-        {
-            let e = RenderParams::resolve(&RenderDefaults::default(), cli).unwrap_err().to_string();
-            assert!(e.contains(flag), "{e}");
+        for (values, param) in bad {
+            let as_flag = RenderParams::resolve(None, &values).unwrap_err();
+            assert_eq!(as_flag.param, param);
+            assert!(as_flag.to_string().starts_with(param.flag()), "{as_flag}");
+            let path = Path::new("dir/scene.toml");
+            let in_file = RenderParams::resolve(Some((path, &values)), &Overrides::default()).unwrap_err();
+            let expected = format!("dir/scene.toml: [render] {} ", param.key());
+            assert!(in_file.to_string().starts_with(&expected), "{in_file}");
+        }
+    }
+
+    #[test]
+    fn the_render_table_is_typed_and_unknown_keys_are_refused() {
+        let table: toml::Table = toml::from_str("sensor = \"frustum\"\nfov_deg = 90\ntile = 8").unwrap();
+        let o = Overrides::from_scene_table(Path::new("s.toml"), &table).unwrap();
+        assert_eq!((o.sensor, o.fov_deg, o.tile), (Some(SensorShape::Frustum), Some(90.0), Some(8)));
+        for bad in ["samples = 4", "sensor = \"fisheye\"", "tile = \"eight\""] {
+            let table: toml::Table = toml::from_str(bad).unwrap();
+            let e = Overrides::from_scene_table(Path::new("s.toml"), &table).unwrap_err().to_string();
+            assert!(e.starts_with("s.toml: [render]: "), "{e}");
         }
     }
 }

@@ -11,7 +11,7 @@ fn devices_lists_every_device_with_its_limits() {
     assert!(run.status.success(), "{}", common::stderr(&run));
     let stdout = String::from_utf8_lossy(&run.stdout);
     let instance = Instance::new(false).unwrap();
-    let adapters = adapter::enumerate(&instance).unwrap();
+    let adapters = adapter::enumerate(&instance, &sensorlight::passes::requirements()).unwrap();
     for a in &adapters {
         assert!(stdout.contains(&format!("[{}] {}", a.index, a.name)), "{} missing from:\n{stdout}", a.name);
         assert!(stdout.contains(&format!("maxMultiviewViewCount {}", a.limits.max_multiview_view_count)));

@@ -81,7 +81,7 @@ fn shared_structs_match_glsl() {
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
         (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip_plane, layer, _pad)),
         (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, atlas_columns, atlas_rows, _pad)),
-        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, first_sensor, atlas_columns)),
+        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, atlas_columns, _pad)),
         (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
         (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),
     ];

@@ -89,7 +89,7 @@ fn bad_metrics_arguments_are_clear_errors() {
     for (flags, expected) in [
         (&["--resolutions", "200by200"][..], "WIDTHxHEIGHT"),
         (&["--scene", "/nonexistent/scene.toml"], "cannot read scene file"),
-        (&["--strategy", "warp"], "unknown strategy"),
+        (&["--strategy", "warp"], "invalid value 'warp'"),
     ] {
         let dir = common::scratch("metrics_bad");
         let mut args = vec!["metrics", "--quick", "-o", dir.to_str().unwrap()];

@@ -9,7 +9,7 @@ use sensorlight::reference::post;
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::ImageSize;
 use sensorlight::sensors::SensorKind;
-use sensorlight::vk::{Buffer, Image, ImageDesc, barrier, transfer};
+use sensorlight::vk::{Access, Buffer, Image, ImageDesc, barrier, transfer};
 
 /// Runs the GPU filter over `source` with surface ids `ids`.
 fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec<Vec4> {
@@ -30,9 +30,9 @@ fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec
         let pass = FilterPass::new(device).unwrap();
         pass.bind(device, &src, &dst, &id_image);
         device
-            .submit_and_wait(|cmd| {
-                barrier::memory(device, cmd, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::COMPUTE_SHADER);
-                pass.record(device, cmd, size, radius);
+            .submit_and_wait(|enc| {
+                barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeRead]);
+                pass.record(enc, size, radius);
                 Ok(())
             })
             .unwrap();
@@ -85,7 +85,7 @@ fn filter_keeps_a_sharp_id_edge_exact_and_radius_zero_is_identity() {
 fn gpu_composition_matches_the_cpu_twin() {
     let scene = common::lightbox((24, 24));
     let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.1);
-    params.filter_radius = 1;
+    params.frame.filter_radius = 1;
     let out = common::render(&scene, &params, None);
     let expected = post::compose(&out.gbuffer, &out.radiance);
     assert!(expected.iter().any(|p| p.truncate() != Vec3::ZERO));

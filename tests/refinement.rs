@@ -11,7 +11,7 @@ use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
 use sensorlight::sensors::SensorKind;
 use sensorlight::sensors::refine::{Refinement, interpolate_cpu};
-use sensorlight::vk::{Buffer, barrier, transfer};
+use sensorlight::vk::{Access, Buffer, barrier, transfer};
 
 /// A synthetic G-buffer: every pixel a surface (ids from `id`), all facing +z.
 fn gbuffer(width: u32, height: u32, id: impl Fn(u32, u32) -> u32) -> GBufferData {
@@ -136,9 +136,9 @@ fn gpu_interpolation_matches_the_cpu_twin() {
         let mut pass = InterpolatePass::new(device).unwrap();
         pass.bind(device, &quads, &radiance).unwrap();
         device
-            .submit_and_wait(|cmd| {
-                barrier::compute_to_compute(device, cmd);
-                pass.record(device, cmd, size);
+            .submit_and_wait(|enc| {
+                barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
+                pass.record(enc, size);
                 Ok(())
             })
             .unwrap();
@@ -165,8 +165,8 @@ fn rendered_boundary_pixels_are_sensed() {
         vec![common::material("a", 0.5, 0.0), common::material("b", 0.5, 0.0), common::material("lamp", 0.0, 1.0)];
     let scene = common::scene(vec![("a", 0, a), ("b", 1, b), ("lamp", 2, light)], materials, camera, (40, 40));
     let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.0);
-    params.tile = 8;
-    params.dradiance = 1e30;
+    params.frame.tile = 8;
+    params.frame.dradiance = 1e30;
     let out = common::render(&scene, &params, None);
     let ids = &out.gbuffer.surface;
     let distinct: std::collections::BTreeSet<_> = ids.iter().collect();

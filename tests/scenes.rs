@@ -6,6 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use sensorlight::params::{Overrides, RenderParams};
 use sensorlight::scene::Scene;
 
 const CAMERA: &str = "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nvfov_deg = 40\n[image]\nwidth = 16\nheight = 16\n";
@@ -57,10 +58,29 @@ fn unknown_toml_key_is_an_error() {
     rejects("unknown_key", Some(QUAD), Some(&body), &["scene.toml", "samples"]);
 }
 
+/// The scene loader keeps `[render]` as written (it knows no render parameter); resolving the parameters
+/// names the file and the key, in the library and on the command line, and a flag does not hide it.
 #[test]
-fn bad_render_table_names_the_file() {
+fn bad_render_table_names_the_file_and_key() {
+    let dir = common::scratch("bad_render_table");
     let body = format!("mesh = \"mesh.obj\"\n{CAMERA}[render]\ntile = 12\n");
-    rejects("bad_render_table", Some(QUAD), Some(&body), &["scene.toml: [render]", "power of two"]);
+    let path = write_scene(&dir, Some(QUAD), Some(&body));
+    let scene = Scene::load(&path).unwrap();
+    let values = Overrides::from_scene_table(&path, &scene.render).unwrap();
+    let error = RenderParams::resolve(Some((&path, &values)), &Overrides::default()).unwrap_err().to_string();
+    assert!(error.contains("scene.toml: [render] tile must be a power of two") && error.contains("got 12"), "{error}");
+    let out = dir.join("out.exr");
+    for flags in [&[][..], &["--tile", "8"]] {
+        let mut args = vec!["render", path.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        common::expect_failure(&args, "scene.toml: [render] tile must be a power of two");
+        assert!(!out.exists());
+    }
+    let body = format!("mesh = \"mesh.obj\"\n{CAMERA}[render]\nsensor = \"fisheye\"\n");
+    let path = write_scene(&dir, Some(QUAD), Some(&body));
+    let args = ["render", path.to_str().unwrap(), "-o", out.to_str().unwrap()];
+    let stderr = common::expect_failure(&args, "scene.toml: [render]");
+    assert!(stderr.contains("fisheye") && stderr.contains("hemicube"), "{stderr}");
 }
 
 #[test]

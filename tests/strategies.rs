@@ -1,87 +1,117 @@
-//! Sensor-map batching strategies: the ones that pass the self-check agree with `per-sensor`; `auto` never
-//! picks one that fails; a strategy the device gets wrong is refused when asked for by name.
+//! Sensor-map batching strategies: every strategy that passes its self-check agrees with `per-sensor`, one
+//! named test per (strategy, sensor kind, map size) so that one failure hides no other; one that fails
+//! (multiview on lavapipe 22.3) or cannot run is refused when asked for by name; `auto` never picks a
+//! strategy that failed its check.
 
 mod common;
 
-use sensorlight::passes::sensor_maps::{StrategyDesc, StrategyKind, unsupported};
-use sensorlight::sensors::SensorKind;
-use sensorlight::strategy::{self, Cache, CheckResult, Probe, relative_difference};
+use std::sync::Arc;
 
+use glam::{Vec3, Vec4};
+use sensorlight::params::FrameParams;
+use sensorlight::passes::sensor_maps::{StrategyDesc, unsupported};
+use sensorlight::renderer::{self, Renderer, probe_pixels, sensor_bytes};
+use sensorlight::scene::ImageSize;
+use sensorlight::sensors::SensorKind;
+use sensorlight::strategy::{self, Cache, CheckResult, Event, StrategyKind, StrategyRequest, relative_difference};
+use sensorlight::vk::Device;
+
+const HEMICUBE: SensorKind = SensorKind::Hemicube;
 const FRUSTUM: SensorKind = SensorKind::Frustum { fov_deg: 135.0 };
 
-/// On a fixed scene (the built-in lightbox, 40 sensors in batches of 7), every strategy that passes the
-/// self-check gives per-sensor's R within float tolerance, for both sensor kinds and at two map sizes.
-#[test]
-fn strategies_that_pass_agree_with_per_sensor() {
-    let probe = Probe::new(40);
+/// 40 sensors on the built-in lightbox, in batches of 7 (full and partial batches), sensed by `kind`.
+fn probe(device: &Arc<Device>, kind: StrategyKind, sensor: SensorKind, rd: u32) -> Vec<Vec4> {
+    let size = ImageSize { width: 32, height: 32 };
+    let scene = common::lightbox((size.width, size.height));
+    let mut renderer = Renderer::builder(device, &scene, sensor, rd)
+        .memory_budget(Some(7 * sensor_bytes(sensor, rd)))
+        .build_unchecked(kind)
+        .unwrap();
+    let pixels = probe_pixels(&renderer.gbuffer(size).unwrap().surface, 40);
+    let frame = FrameParams { epsilon: 0.1, background: Vec3::splat(0.02), tile: 1, dradiance: 0.0, filter_radius: 0 };
+    renderer.sense_at(size, &pixels, &frame).unwrap().0
+}
+
+/// A strategy that passes its self-check gives per-sensor's R within float tolerance; one that fails it
+/// or cannot run is refused when asked for by name, with the reason.
+fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, rd: u32) {
     common::gpu(|device| {
-        for sensor in [SensorKind::Hemicube, FRUSTUM] {
-            for rd in [16, 48] {
-                let budget = 7 * sensor.layers() as u64 * (rd as u64).pow(2) * 12;
-                let (reference, _) = probe.run(device, sensor, rd, Some(budget), StrategyKind::PerSensor).unwrap();
-                assert!(reference.iter().all(|r| r.w == 1.0 && r.x > 0.0), "every probe sensor is sensed and lit");
-                for kind in StrategyKind::ALL {
-                    let desc = StrategyDesc { sensor, rd, budget, near: 0.0 };
-                    if unsupported(kind, device, &desc).is_some()
-                        || !strategy::self_check(device, sensor, kind).unwrap().passed
-                    {
-                        continue;
-                    }
-                    let (r, _) = probe.run(device, sensor, rd, Some(budget), kind).unwrap();
-                    let difference = relative_difference(&r, &reference);
-                    assert!(
-                        difference <= 1e-5,
-                        "{kind}, {sensor}, rd {rd}: differs from per-sensor by {difference:.2e}"
-                    );
-                }
-            }
+        let reference = probe(device, StrategyKind::PerSensor, sensor, rd);
+        assert!(reference.iter().all(|r| r.w == 1.0 && r.x > 0.0), "every probe sensor is sensed and lit");
+        let scene = common::lightbox((8, 8));
+        let named = Renderer::builder(device, &scene, sensor, rd).strategy(StrategyRequest::Fixed(kind)).build();
+        let desc = StrategyDesc { sensor, rd, budget: 1 << 24, near: 0.0 };
+        if let Some(why) = unsupported(kind, device, &desc) {
+            let message = named.err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(message.contains("cannot run") && message.contains(&why), "{kind}: {message}");
+            return;
         }
+        if !renderer::self_check(device, sensor, kind).unwrap().passed {
+            let message = named.err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(message.contains("disagrees with per-sensor"), "{kind}: {message}");
+            return;
+        }
+        assert_eq!(named.unwrap().strategy(), kind, "a strategy that passes is used when asked for");
+        let difference = relative_difference(&probe(device, kind, sensor, rd), &reference);
+        assert!(difference <= 1e-5, "{kind}, {sensor}, rd {rd}: differs from per-sensor by {difference:.2e}");
     });
 }
 
-/// `auto` skips a strategy whose self-check failed, even where it would be the fastest.
+macro_rules! strategy_matrix {
+    ($($name:ident: $kind:ident, $sensor:expr, $rd:expr;)*) => {
+        $(
+            #[test]
+            fn $name() {
+                agrees_with_per_sensor(StrategyKind::$kind, $sensor, $rd);
+            }
+        )*
+    };
+}
+
+strategy_matrix! {
+    single_cb_hemicube_rd16: SingleCb, HEMICUBE, 16;
+    single_cb_hemicube_rd48: SingleCb, HEMICUBE, 48;
+    single_cb_frustum_rd16: SingleCb, FRUSTUM, 16;
+    single_cb_frustum_rd48: SingleCb, FRUSTUM, 48;
+    multiview_hemicube_rd16: Multiview, HEMICUBE, 16;
+    multiview_hemicube_rd48: Multiview, HEMICUBE, 48;
+    multiview_frustum_rd16: Multiview, FRUSTUM, 16;
+    multiview_frustum_rd48: Multiview, FRUSTUM, 48;
+    layered_hemicube_rd16: Layered, HEMICUBE, 16;
+    layered_hemicube_rd48: Layered, HEMICUBE, 48;
+    layered_frustum_rd16: Layered, FRUSTUM, 16;
+    layered_frustum_rd48: Layered, FRUSTUM, 48;
+    atlas_hemicube_rd16: Atlas, HEMICUBE, 16;
+    atlas_hemicube_rd48: Atlas, HEMICUBE, 48;
+    atlas_frustum_rd16: Atlas, FRUSTUM, 16;
+    atlas_frustum_rd48: Atlas, FRUSTUM, 48;
+}
+
+/// `auto` skips a strategy whose self-check failed, even where it would be the fastest, and says what it
+/// measured.
 #[test]
 fn auto_never_picks_a_strategy_that_failed_its_check() {
     common::gpu(|device| {
+        let scene = common::lightbox((8, 8));
+        let key = strategy::device_key(&device.adapter);
         for failing in [StrategyKind::Layered, StrategyKind::Atlas] {
             let mut cache = Cache::in_memory();
-            // Every other strategy fails too, except per-sensor and `failing`'s complement.
+            // Every strategy fails but per-sensor and `failing`'s complement.
             for kind in StrategyKind::ALL {
                 let passed = kind == StrategyKind::PerSensor || (kind != failing && kind != StrategyKind::Multiview);
-                cache.record_check(device, SensorKind::Hemicube, kind, CheckResult { max_difference: 0.0, passed });
+                cache.record_check(&key, HEMICUBE, kind, CheckResult { max_difference: 0.0, passed });
             }
-            let mut log = Vec::new();
-            let choice =
-                strategy::choose(device, SensorKind::Hemicube, 16, 1 << 22, None, &mut cache, &mut |l| log.push(l))
-                    .unwrap();
-            assert_ne!(choice.strategy, failing, "auto picked a strategy that failed its self-check");
-            assert_ne!(choice.strategy, StrategyKind::Multiview);
-            assert!(log.iter().any(|l| l.contains("auto: per sensor")), "auto says what it measured: {log:?}");
-        }
-    });
-}
-
-/// Asking for a strategy by name runs its self-check; one that fails on this device is refused with a
-/// clear message (on lavapipe 22.3 that is multiview, see docs/BENCHMARKS.md), one that passes is used.
-#[test]
-fn a_named_strategy_is_checked_before_use() {
-    common::gpu(|device| {
-        for kind in StrategyKind::ALL {
-            let mut cache = Cache::in_memory();
-            let desc = StrategyDesc { sensor: SensorKind::Hemicube, rd: 16, budget: 1 << 22, near: 0.0 };
-            let result =
-                strategy::choose(device, SensorKind::Hemicube, 16, 1 << 22, Some(kind), &mut cache, &mut |_| ());
-            match (
-                unsupported(kind, device, &desc),
-                strategy::self_check(device, SensorKind::Hemicube, kind).unwrap().passed,
-            ) {
-                (Some(_), _) => assert!(result.unwrap_err().to_string().contains("cannot run")),
-                (None, true) => assert_eq!(result.unwrap().strategy, kind),
-                (None, false) => {
-                    let message = result.err().map(|e| e.to_string()).unwrap_or_default();
-                    assert!(message.contains("disagrees with per-sensor"), "{kind}: {message}");
-                }
-            }
+            let mut events = Vec::new();
+            let mut record = |e: Event| events.push(e);
+            let renderer = Renderer::builder(device, &scene, HEMICUBE, 16)
+                .memory_budget(Some(1 << 22))
+                .cache(&mut cache)
+                .on_strategy_event(&mut record)
+                .build()
+                .unwrap();
+            assert_ne!(renderer.strategy(), failing, "auto picked a strategy that failed its self-check");
+            assert_ne!(renderer.strategy(), StrategyKind::Multiview);
+            assert!(events.iter().any(|e| matches!(e, Event::Measured { .. })), "auto says what it measured");
         }
     });
 }

@@ -1,21 +1,34 @@
-//! Flags shared by several sub-commands, and how they become [`Overrides`].
+//! Flags shared by several sub-commands, and how they become [`Overrides`]. Defaults shown in `--help` are
+//! taken from the constants in `params`, so they cannot drift from what the program does.
 
 use anyhow::{Result, ensure};
 use clap::Args;
-use sensorlight::params::Overrides;
+use sensorlight::params::{
+    DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG, DEFAULT_SENSOR,
+    DEFAULT_SENSOR_SIZE, DEFAULT_TILE, Overrides, SensorShape,
+};
 use sensorlight::scene::{ImageSize, Scene};
 
-/// What a sensor sees: shared by `render` and `reference`.
+/// What a sensor sees: shared by `render`, `reference` and `bench`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct EstimatorFlags {
-    /// Sensor kind: `hemicube` (whole hemisphere) or `frustum` (the paper's single view) [default: hemicube]
-    #[arg(long)]
-    pub sensor: Option<String>,
-    /// Field of view of frustum sensors, degrees, in (0, 180) [default: 135]
-    #[arg(long = "fov", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_enum,
+        help = format!("Sensor kind [default: {DEFAULT_SENSOR}; for `metrics`: {}, the paper's]", SensorShape::Frustum)
+    )]
+    pub sensor: Option<SensorShape>,
+    #[arg(
+        long = "fov",
+        allow_negative_numbers = true,
+        help = format!("Field of view of frustum sensors, degrees, in (0, 180) [default: {DEFAULT_FOV_DEG}]")
+    )]
     pub fov_deg: Option<f32>,
-    /// ε: non-emitters seen by a sensor return Kd·ε (≥ 0; 0 = direct light only) [default: 0.1]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        help = format!("ε: non-emitters seen by a sensor return Kd·ε (≥ 0; 0 = direct light only) [default: {DEFAULT_EPSILON}]")
+    )]
     pub epsilon: Option<f32>,
     /// Radiance of rays leaving the scene, as R,G,B [default: 0,0,0]
     #[arg(long, value_parser = parse_rgb, allow_negative_numbers = true)]
@@ -25,15 +38,29 @@ pub struct EstimatorFlags {
 /// Adaptive refinement and filtering (paper §III-G, §III-H): shared by `render` and `metrics`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct RefinementFlags {
-    /// dt: initial sensor grid step, a power of two [default: 16]
-    #[arg(long)]
+    #[arg(long, help = format!("dt: initial sensor grid step, a power of two [default: {DEFAULT_TILE}]"))]
     pub tile: Option<u32>,
-    /// Interpolate a quad when R varies by less than this between its corners (0 = sense every pixel) [default: 0.2]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        help = format!(
+            "Interpolate a quad when R varies by less than this between its corners (0 = sense every pixel) \
+             [default: {DEFAULT_DRADIANCE}]"
+        )
+    )]
     pub dradiance: Option<f32>,
-    /// Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: 2]
-    #[arg(long)]
+    #[arg(
+        long,
+        help = format!(
+            "Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: {DEFAULT_FILTER_RADIUS}]"
+        )
+    )]
     pub filter_radius: Option<u32>,
+}
+
+/// The sensor map size: shared by `render` and `metrics`.
+pub fn sensor_size_help() -> String {
+    format!("rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: {DEFAULT_SENSOR_SIZE}]")
 }
 
 /// Output size and preview: shared by `render` and `reference`.
@@ -45,8 +72,11 @@ pub struct ImageFlags {
     /// Image height in pixels [default: the scene's]
     #[arg(long)]
     pub height: Option<u32>,
-    /// Exposure of the PNG preview, in stops [default: 0]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        help = format!("Exposure of the PNG preview, in stops [default: {DEFAULT_EXPOSURE}]")
+    )]
     pub exposure: Option<f32>,
     /// Write a tone-mapped sRGB PNG beside the EXR (the default)
     #[arg(long, overrides_with = "no_png")]
@@ -59,7 +89,7 @@ pub struct ImageFlags {
 impl EstimatorFlags {
     pub fn overrides(&self) -> Overrides {
         Overrides {
-            sensor: self.sensor.clone(),
+            sensor: self.sensor,
             fov_deg: self.fov_deg,
             epsilon: self.epsilon,
             background: self.background,

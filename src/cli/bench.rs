@@ -5,12 +5,12 @@ use std::process::ExitCode;
 
 use anyhow::{Result, ensure};
 use clap::Args;
-use sensorlight::bench::{self, BenchConfig, BenchReport};
+use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport};
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
-use sensorlight::params::EstimatorParams;
-use sensorlight::passes::sensor_maps::StrategyKind;
-use sensorlight::scene::{ImageSize, Scene, builtin};
+use sensorlight::params::RenderParams;
+use sensorlight::scene::{ImageSize, builtin};
+use sensorlight::strategy::StrategyKind;
 
 use super::args::EstimatorFlags;
 
@@ -23,8 +23,8 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "32,64,128,256")]
     sizes: Vec<u32>,
     /// Strategies to compare, comma-separated [default: all]
-    #[arg(long, value_delimiter = ',')]
-    strategies: Vec<String>,
+    #[arg(long, value_enum, value_delimiter = ',')]
+    strategies: Vec<StrategyKind>,
     /// Sensors per run
     #[arg(long, default_value_t = 256)]
     sensors: usize,
@@ -56,18 +56,13 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     for path in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
         atomic::check_writable(path)?;
     }
-    let strategies = if args.strategies.is_empty() {
-        StrategyKind::ALL.to_vec()
-    } else {
-        args.strategies.iter().map(|s| StrategyKind::parse(s)).collect::<Result<Vec<_>>>()?
-    };
+    let strategies = if args.strategies.is_empty() { StrategyKind::ALL.to_vec() } else { args.strategies.clone() };
     let size = ImageSize { width: 128, height: 128 };
-    let scene = match &args.scene {
-        Some(path) => Scene::load(path)?,
-        None => builtin::lightbox(size),
+    let (scene, params) = match &args.scene {
+        Some(path) => super::load_scene(path, &args.estimator.overrides())?,
+        None => (builtin::lightbox(size), RenderParams::resolve(None, &args.estimator.overrides())?),
     };
-    super::print_warnings(&scene);
-    let estimator = EstimatorParams::resolve(&scene.render, &args.estimator.overrides())?;
+    let estimator = params.estimator;
     let config = BenchConfig {
         scene,
         size,
@@ -79,11 +74,10 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     };
     super::with_device(args.device, |device| {
         let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
-        let report = bench::run(device, &config, &mut |line| {
-            if line.starts_with("rd ") {
-                bar.inc(1);
-            } else {
-                bar.suspend(|| eprintln!("{line}"));
+        let report = bench::run(device, &config, &mut |event| match event {
+            BenchEvent::Round { .. } => bar.inc(1),
+            BenchEvent::Checked { strategy, result } => {
+                bar.suspend(|| eprintln!("self-check {strategy}: max difference {:.2e}", result.max_difference))
             }
         })?;
         bar.finish_and_clear();

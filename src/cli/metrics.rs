@@ -8,9 +8,9 @@ use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 use indicatif::ProgressBar;
 use sensorlight::metrics::{self, MetricsConfig, report};
-use sensorlight::params::{Overrides, RenderParams};
+use sensorlight::params::{Overrides, RenderParams, SensorShape};
 use sensorlight::scene::{ImageSize, Scene};
-use sensorlight::strategy::Cache;
+use sensorlight::strategy::{Cache, StrategyRequest};
 
 use super::args::{EstimatorFlags, RefinementFlags};
 
@@ -51,8 +51,8 @@ pub struct MetricsArgs {
     #[command(flatten)]
     refinement: RefinementFlags,
     /// Batching strategy: auto or a name (see `render --help`)
-    #[arg(long, default_value = "auto")]
-    strategy: String,
+    #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
+    strategy: StrategyRequest,
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
@@ -78,16 +78,20 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
         args.output.display()
     );
     let scene = Scene::load(&scene_path)?;
-    super::print_warnings(&scene);
-    // The paper's sensor unless the command line or the scene says otherwise.
-    let sensor = args.estimator.sensor.clone().or_else(|| scene.render.sensor.clone()).or(Some("frustum".into()));
-    let overrides = args.refinement.overrides(Overrides {
-        sensor,
-        sensor_size: args.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
-        ..args.estimator.overrides()
-    });
-    let params = RenderParams::resolve(&scene.render, &overrides)?;
-    let mut config = MetricsConfig::new(scene_path.display().to_string(), params);
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let from_file = Overrides::from_scene_table(&scene_path, &scene.render)?;
+    // The paper's sensor and map size unless the command line or the scene says otherwise.
+    let from_file = Overrides {
+        sensor: from_file.sensor.or(Some(SensorShape::Frustum)),
+        sensor_size: from_file.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
+        ..from_file
+    };
+    let overrides =
+        args.refinement.overrides(Overrides { sensor_size: args.sensor_size, ..args.estimator.overrides() });
+    let params = RenderParams::resolve(Some((&scene_path, &from_file)), &overrides)?;
+    let mut config = MetricsConfig::new(scene_path.display().to_string(), params.clone());
     if args.quick {
         config = config.quick();
     }
@@ -104,7 +108,7 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
     let all = !(args.table1 || args.fig10 || args.fig11);
     config.table1 = all || args.table1;
     config.figures = all || args.fig10 || args.fig11;
-    config.strategy = super::parse_strategy(&args.strategy)?;
+    config.strategy = args.strategy;
     ensure!(config.figure_sizes.iter().all(|&rd| rd >= 2), "--sizes must be at least 2");
 
     super::with_device(args.device, |device| {

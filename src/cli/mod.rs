@@ -8,17 +8,17 @@ mod metrics;
 mod reference;
 mod render;
 
+use std::path::Path;
 use std::process::ExitCode;
 use std::sync::Arc;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use sensorlight::passes::sensor_maps::StrategyKind;
+use sensorlight::params::{Overrides, ParamError, RenderParams};
 use sensorlight::renderer::Progress;
 use sensorlight::scene::Scene;
-use sensorlight::sensors::SensorKind;
-use sensorlight::strategy;
+use sensorlight::strategy::Event;
 use sensorlight::vk::{Device, DeviceOptions};
 
 #[derive(Parser)]
@@ -57,9 +57,29 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     }
 }
 
+/// Loads the scene at `path` and resolves the parameters: `flags` over its `[render]` table over the
+/// defaults. Prints the scene's warnings.
+fn load_scene(path: &Path, flags: &Overrides) -> Result<(Scene, RenderParams)> {
+    let scene = Scene::load(path)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let from_file = Overrides::from_scene_table(path, &scene.render)?;
+    let params = RenderParams::resolve(Some((path, &from_file)), flags)?;
+    Ok((scene, params))
+}
+
+/// Names a [`ParamError`] found by the library (e.g. a device limit) as the user set the value.
+fn attribute(params: &RenderParams, error: anyhow::Error) -> anyhow::Error {
+    match error.downcast::<ParamError>() {
+        Ok(e) => params.attribute(e).into(),
+        Err(other) => other,
+    }
+}
+
 /// Checks, before any work, that an EXR output and what is written beside it (the PNG preview unless
 /// `png` is false, `extra` files) can be written.
-fn check_exr_outputs(exr: &std::path::Path, png: bool, extra: &[&std::path::Path]) -> Result<()> {
+fn check_exr_outputs(exr: &Path, png: bool, extra: &[&Path]) -> Result<()> {
     sensorlight::output::atomic::check_extension(exr, "exr")?;
     let png = png.then(|| exr.with_extension("png"));
     for path in [Some(exr), png.as_deref()].into_iter().flatten().chain(extra.iter().copied()) {
@@ -74,8 +94,11 @@ const EXIT_VALIDATION: u8 = 3;
 /// Opens the device (`--device N` or the best one), says which, runs `work`, closes the device, and turns
 /// validation messages into a non-zero exit.
 fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> Result<()>) -> Result<ExitCode> {
-    let options = DeviceOptions::from_env(device_index);
-    let device = Device::new(&options)?;
+    let options = DeviceOptions::from_env(device_index, sensorlight::passes::requirements());
+    let device = match device_index {
+        Some(i) => Device::new(&options).with_context(|| format!("--device {i} (see `sensorlight devices`)"))?,
+        None => Device::new(&options)?,
+    };
     eprintln!("device: {}", device.adapter);
     let log = device.validation_log().clone();
     let result = work(&device);
@@ -89,9 +112,23 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_warnings(scene: &Scene) {
-    for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
+/// Says what the strategy choice found worth saying: refusals, and what `auto` measured.
+fn report_strategy_event(event: Event) {
+    match event {
+        Event::Checked { strategy, result, cached } if !result.passed => {
+            let how = if cached { "self-check (cached)" } else { "self-check" };
+            eprintln!(
+                "{how}: {strategy} vs per-sensor: max difference {:.2e} of the brightest R: FAILS (refused on this device)",
+                result.max_difference
+            );
+        }
+        Event::Measured { rd, per_sensor } => {
+            let timings: Vec<String> =
+                per_sensor.iter().map(|(k, t)| format!("{k} {:.3} ms", t.as_secs_f64() * 1e3)).collect();
+            eprintln!("auto: per sensor at rd {rd}: {}", timings.join(", "));
+        }
+        Event::Unsupported { strategy, why } => eprintln!("{strategy}: unsupported here ({why})"),
+        Event::Checked { .. } => {}
     }
 }
 
@@ -111,25 +148,7 @@ impl Progress for SensorBar {
 fn progress_bar(total: u64, unit: &str) -> ProgressBar {
     let bar = ProgressBar::new(total);
     let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");
-    bar.set_style(ProgressStyle::with_template(&template).unwrap().progress_chars("=> "));
+    let style = ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
     bar
-}
-
-/// `auto` or a strategy name.
-fn parse_strategy(name: &str) -> Result<Option<StrategyKind>> {
-    if name == "auto" { Ok(None) } else { StrategyKind::parse(name).map(Some) }
-}
-
-/// Picks the sensor-map strategy (self-checked, cached) and says which and why.
-fn choose_strategy(
-    device: &Arc<Device>,
-    sensor: SensorKind,
-    rd: u32,
-    budget: u64,
-    requested: Option<StrategyKind>,
-) -> Result<StrategyKind> {
-    let mut cache = strategy::Cache::open_default();
-    let choice = strategy::choose(device, sensor, rd, budget, requested, &mut cache, &mut |line| eprintln!("{line}"))?;
-    eprintln!("strategy: {} ({})", choice.strategy, choice.reason);
-    Ok(choice.strategy)
 }

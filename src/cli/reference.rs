@@ -7,9 +7,8 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 use sensorlight::output::{exr::ExrImage, png};
-use sensorlight::params::EstimatorParams;
+use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
-use sensorlight::scene::Scene;
 
 use super::args::{EstimatorFlags, ImageFlags};
 
@@ -34,9 +33,9 @@ pub struct ReferenceArgs {
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     super::check_exr_outputs(&args.output, args.image.write_png(), &[])?;
-    let scene = Scene::load(&args.scene)?;
-    super::print_warnings(&scene);
-    let params = EstimatorParams::resolve(&scene.render, &args.estimator.overrides())?;
+    let flags = Overrides { exposure: args.image.exposure, ..args.estimator.overrides() };
+    let (scene, resolved) = super::load_scene(&args.scene, &flags)?;
+    let params = resolved.estimator;
     let size = args.image.size(&scene)?;
     let integrator = Integrator::new(&scene, params, args.samples, args.seed)?;
     eprintln!(
@@ -69,7 +68,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     eprintln!("wrote {}", args.output.display());
     if args.image.write_png() {
         let path = args.output.with_extension("png");
-        png::write(&path, size.width, size.height, &result.image, args.image.exposure.unwrap_or(0.0))?;
+        png::write(&path, size.width, size.height, &result.image, resolved.exposure)?;
         eprintln!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)

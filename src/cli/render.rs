@@ -8,10 +8,10 @@ use clap::Args;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Overrides, RenderParams};
-use sensorlight::renderer::{RenderOutput, RenderStats, Renderer, default_memory_budget};
-use sensorlight::scene::Scene;
+use sensorlight::renderer::{RenderOutput, RenderStats, Renderer};
+use sensorlight::strategy::{Cache, StrategyRequest};
 
-use super::args::{EstimatorFlags, ImageFlags, RefinementFlags};
+use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, sensor_size_help};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -24,8 +24,7 @@ pub struct RenderArgs {
     estimator: EstimatorFlags,
     #[command(flatten)]
     image: ImageFlags,
-    /// rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: 256]
-    #[arg(long)]
+    #[arg(long, help = sensor_size_help())]
     sensor_size: Option<u32>,
     #[command(flatten)]
     refinement: RefinementFlags,
@@ -35,13 +34,14 @@ pub struct RenderArgs {
     /// Write the render statistics as JSON to this file
     #[arg(long)]
     stats_json: Option<PathBuf>,
-    /// Memory for one batch of sensor maps, MiB [default: 1/8 of the device's local memory]
+    /// Memory for one batch of sensor maps, MiB [default: the batches in flight share 1/8 of the device's
+    /// local memory]
     #[arg(long)]
     memory_budget: Option<u64>,
-    /// How sensors are batched: auto (the fastest that passes its self-check here), per-sensor, single-cb,
-    /// multiview, layered or atlas
-    #[arg(long, default_value = "auto")]
-    strategy: String,
+    /// How sensors are batched: auto (the fastest that passes its self-check here) or a strategy, used only
+    /// if it passes its self-check
+    #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
+    strategy: StrategyRequest,
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
@@ -60,18 +60,21 @@ impl RenderArgs {
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let stats_json: Vec<&std::path::Path> = args.stats_json.iter().map(PathBuf::as_path).collect();
     super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json)?;
-    let scene = Scene::load(&args.scene)?;
-    super::print_warnings(&scene);
-    let params = RenderParams::resolve(&scene.render, &args.overrides())?;
+    let (scene, params) = super::load_scene(&args.scene, &args.overrides())?;
     let size = args.image.size(&scene)?;
-    let requested = super::parse_strategy(&args.strategy)?;
     super::with_device(args.device, |device| {
-        let budget = args.memory_budget.map(|mib| mib << 20).unwrap_or_else(|| default_memory_budget(device));
-        let (sensor, rd) = (params.estimator.sensor, params.sensor_size);
-        let strategy = super::choose_strategy(device, sensor, rd, budget, requested)?;
-        let mut renderer = Renderer::new(device, &scene, sensor, rd, Some(budget), strategy)?;
+        let mut cache = Cache::open_default();
+        let mut report = super::report_strategy_event;
+        let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
+            .memory_budget(args.memory_budget.map(|mib| mib << 20))
+            .strategy(args.strategy)
+            .cache(&mut cache)
+            .on_strategy_event(&mut report)
+            .build()
+            .map_err(|e| super::attribute(&params, e))?;
+        eprintln!("strategy: {} ({})", renderer.strategy(), renderer.choice().reason);
         let bar = super::SensorBar(super::progress_bar(0, "sensors"));
-        let output = renderer.render(&scene, size, &params, &bar)?;
+        let output = renderer.render(size, &params.frame(), &bar)?;
         bar.0.finish_and_clear();
         print_stats(&output.stats);
         write_outputs(&args, &params, &output)
@@ -80,20 +83,38 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
 
 fn print_stats(s: &RenderStats) {
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
+    let read_back: u64 = s.readback_bytes_per_round.iter().sum();
     eprintln!(
-        "{} sensors ({}, rd {}, {}) in {} batches of up to {}; per refinement round: {}; {} quads interpolated",
+        "{} sensors ({}, rd {}, {}) in {} batches of up to {}, {} in flight; per refinement round: {}; {} quads \
+         interpolated; {:.1} KiB read back",
         s.sensors,
         s.sensor,
         s.sensor_size,
         s.strategy,
         s.batches,
         s.batch_size,
+        s.in_flight,
         rounds.join(" + "),
-        s.interpolated_quads
+        s.interpolated_quads,
+        read_back as f64 / 1024.0
     );
+    let t = &s.times;
+    let gpu = match (t.gpu_maps_seconds, t.gpu_reduction_seconds) {
+        (Some(maps), Some(reduction)) => format!("GPU {maps:.2} s sensor maps + {reduction:.2} s reduction"),
+        _ => "no GPU timestamps".into(),
+    };
     eprintln!(
-        "{:.2} s total, sensor time {:.4} ms (total / sensors); GPU {:.2} s sensors + {:.2} s other, host {:.2} s; {}",
-        s.total_seconds, s.sensor_time_ms, s.gpu_sensor_seconds, s.gpu_other_seconds, s.host_seconds, s.device
+        "{:.2} s total, sensor time {:.4} ms (total / sensors): G-buffer {:.2} s, sensing {:.2} s (host: record \
+         {:.2} s, wait {:.2} s, refine {:.2} s; {gpu}), post {:.2} s; {}",
+        s.total_seconds,
+        s.sensor_time_ms,
+        t.gbuffer_seconds,
+        t.sensing_seconds,
+        t.host_record_seconds,
+        t.host_wait_seconds,
+        t.host_refine_seconds,
+        t.post_seconds,
+        s.device
     );
 }
 

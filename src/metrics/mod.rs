@@ -15,10 +15,9 @@ use anyhow::Result;
 use serde::Serialize;
 
 use crate::params::RenderParams;
-use crate::passes::sensor_maps::StrategyKind;
-use crate::renderer::{Progress, RenderStats, Renderer, default_memory_budget};
+use crate::renderer::{Progress, RenderStats, Renderer};
 use crate::scene::{ImageSize, Scene};
-use crate::strategy::{self, Cache};
+use crate::strategy::{Cache, StrategyRequest};
 use crate::vk::Device;
 
 /// The paper's Table I (GTX 660, DirectX 9, 256² maps): (width, height, sensors, ms per sensor).
@@ -57,7 +56,8 @@ pub struct MetricsConfig {
     pub table1_resolutions: Vec<ImageSize>,
     pub figure_resolutions: Vec<ImageSize>,
     pub figure_sizes: Vec<u32>,
-    pub strategy: Option<StrategyKind>,
+    #[serde(serialize_with = "crate::metrics::serialize_display")]
+    pub strategy: StrategyRequest,
     pub table1: bool,
     pub figures: bool,
 }
@@ -77,7 +77,7 @@ impl MetricsConfig {
             table1_resolutions: PAPER_TABLE1.iter().map(|&(w, h, _, _)| size(&(w, h))).collect(),
             figure_resolutions: FIGURE_RESOLUTIONS.iter().map(size).collect(),
             figure_sizes: FIGURE_SIZES.to_vec(),
-            strategy: None,
+            strategy: StrategyRequest::Auto,
             table1: true,
             figures: true,
         }
@@ -138,24 +138,31 @@ pub fn run(
     progress: &dyn Progress,
     each: &mut dyn FnMut(&Run),
 ) -> Result<Vec<Run>> {
-    let budget = default_memory_budget(device);
     let sensor = config.params.estimator.sensor;
+    let frame = config.params.frame();
     let mut results = Vec::new();
     let mut current: Option<(u32, Renderer)> = None;
     for (experiment, rd, size) in config.runs() {
-        if current.as_ref().is_none_or(|(r, _)| *r != rd) {
-            drop(current.take()); // free the previous map size's images first
-            let choice = strategy::choose(device, sensor, rd, budget, config.strategy, cache, &mut |_| ())?;
-            current = Some((rd, Renderer::new(device, scene, sensor, rd, Some(budget), choice.strategy)?));
-        }
-        let renderer = &mut current.as_mut().expect("set above").1;
-        let params = RenderParams { sensor_size: rd, ..config.params };
-        let output = renderer.render(scene, size, &params, progress)?;
+        let renderer = match current.take() {
+            Some((r, renderer)) if r == rd => &mut current.insert((r, renderer)).1,
+            previous => {
+                drop(previous); // free the previous map size's images first
+                let renderer =
+                    Renderer::builder(device, scene, sensor, rd).strategy(config.strategy).cache(cache).build()?;
+                &mut current.insert((rd, renderer)).1
+            }
+        };
+        let output = renderer.render(size, &frame, progress)?;
         let run = Run { experiment, stats: output.stats };
         each(&run);
         results.push(run);
     }
     Ok(results)
+}
+
+/// Serialises a value by its `Display` (e.g. `auto`, `layered`).
+pub fn serialize_display<T: std::fmt::Display, S: serde::Serializer>(value: &T, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(value)
 }
 
 /// Slope of log(y) against log(x) by least squares: the exponent of a power law through the points.

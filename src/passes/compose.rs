@@ -10,7 +10,7 @@ use crate::gpu_types::ImagePush;
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::ImageSize;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, compute::groups_for};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, compute::groups_for};
 
 pub struct ComposePass {
     kernel: ComputeKernel,
@@ -24,13 +24,14 @@ impl ComposePass {
             shaders::COMPOSE_COMP,
             &[(0, storage), (1, storage), (2, image), (3, image)],
             size_of::<ImagePush>() as u32,
+            1,
         )?;
         Ok(Self { kernel })
     }
 
     pub fn bind(&self, device: &Device, radiance: &Buffer, target: &Buffer, gbuffer: &GBuffer) {
         self.kernel
-            .writer()
+            .writer(0)
             .storage_buffer(0, radiance)
             .storage_buffer(1, target)
             .storage_image(2, gbuffer.albedo.view)
@@ -38,8 +39,8 @@ impl ComposePass {
             .apply(device);
     }
 
-    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, size: ImageSize) {
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize) {
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: 0 };
-        self.kernel.dispatch(device, cmd, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
+        self.kernel.dispatch(enc, 0, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
     }
 }

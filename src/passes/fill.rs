@@ -11,14 +11,12 @@ use ash::vk;
 use super::DEPTH_FORMAT;
 use super::sensor_maps::MAP_FORMAT;
 use crate::shaders;
-use crate::vk::{Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass};
+use crate::vk::{Device, Framebuffer, GraphicsDesc, Image, ImageDesc, ImageView, Pipeline, PipelineLayout, RenderPass};
 
 pub struct FillPass {
     pipeline: Pipeline,
     _layout: PipelineLayout,
     framebuffer: Framebuffer,
-    _color: Image,
-    _depth: Image,
     render_pass: RenderPass,
     layers: u32,
 }
@@ -37,7 +35,8 @@ impl FillPass {
         let color = Image::new(device, "fill colour", desc(MAP_FORMAT, vk::ImageUsageFlags::COLOR_ATTACHMENT))?;
         let depth =
             Image::new(device, "fill depth", desc(DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
-        let framebuffer = Framebuffer::new(device, &render_pass, &[color.view, depth.view], color.extent(), layers)?;
+        let attachments = vec![ImageView::whole(&Arc::new(color))?, ImageView::whole(&Arc::new(depth))?];
+        let framebuffer = Framebuffer::new(device, &render_pass, attachments, layers)?;
         let layout = PipelineLayout::new(device, &[], 0, vk::ShaderStageFlags::VERTEX)?;
         let pipeline = Pipeline::graphics(
             device,
@@ -52,7 +51,7 @@ impl FillPass {
                 depth_compare: Some(vk::CompareOp::GREATER),
             },
         )?;
-        Ok(Self { pipeline, _layout: layout, framebuffer, _color: color, _depth: depth, render_pass, layers })
+        Ok(Self { pipeline, _layout: layout, framebuffer, render_pass, layers })
     }
 
     /// Clears and fills every layer once; returns the time from submission to completion.
@@ -61,14 +60,10 @@ impl FillPass {
             vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ];
-        device.submit_and_wait(|cmd| {
-            self.framebuffer.begin(cmd, &self.render_pass, &clears);
-            // SAFETY: recording state inside the render pass; the pipeline needs no descriptors.
-            unsafe {
-                device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
-                device.raw.cmd_draw(cmd, 3, self.layers, 0, 0);
-                device.raw.cmd_end_render_pass(cmd);
-            }
+        device.submit_and_wait(|enc| {
+            let pass = enc.begin_render_pass(&self.render_pass, &self.framebuffer, &clears, None);
+            pass.bind_pipeline(&self.pipeline); // no descriptors
+            pass.draw(3, self.layers, 0, 0);
             Ok(())
         })
     }

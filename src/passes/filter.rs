@@ -10,7 +10,7 @@ use ash::vk;
 use crate::gpu_types::ImagePush;
 use crate::scene::ImageSize;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Image, compute::groups_for};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, Image, compute::groups_for};
 
 pub struct FilterPass {
     kernel: ComputeKernel,
@@ -24,6 +24,7 @@ impl FilterPass {
             shaders::FILTER_COMP,
             &[(0, storage), (1, storage), (2, vk::DescriptorType::STORAGE_IMAGE)],
             size_of::<ImagePush>() as u32,
+            1,
         )?;
         Ok(Self { kernel })
     }
@@ -31,7 +32,7 @@ impl FilterPass {
     /// Filters `source` into `target` with the surface ids of the G-buffer (call while the GPU is idle).
     pub fn bind(&self, device: &Device, source: &Buffer, target: &Buffer, surface_ids: &Image) {
         self.kernel
-            .writer()
+            .writer(0)
             .storage_buffer(0, source)
             .storage_buffer(1, target)
             .storage_image(2, surface_ids.view)
@@ -39,8 +40,8 @@ impl FilterPass {
     }
 
     /// Radius 0 copies the source unchanged.
-    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, size: ImageSize, radius: u32) {
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, radius: u32) {
         let push = ImagePush { width: size.width, height: size.height, radius, count: 0 };
-        self.kernel.dispatch(device, cmd, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
+        self.kernel.dispatch(enc, 0, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
     }
 }

@@ -14,8 +14,8 @@ use crate::gpu_types::{GBufferPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::scene::{Camera, ImageSize};
 use crate::shaders;
 use crate::vk::{
-    DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass,
-    SetWriter, transfer,
+    DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, ImageView, Pipeline, PipelineLayout,
+    RenderPass, SetWriter, transfer,
 };
 
 /// Colour attachments, in shader output order: position, normal, albedo, emission, surface id.
@@ -42,13 +42,11 @@ pub struct GBufferPass {
 
 /// The G-buffer images on the GPU, each in `GENERAL` layout after [`GBufferPass::render`].
 pub struct GBuffer {
-    _framebuffer: Framebuffer,
-    pub position: Image,
-    pub normal: Image,
-    pub albedo: Image,
-    pub emission: Image,
-    pub surface: Image,
-    _depth: Image,
+    pub position: Arc<Image>,
+    pub normal: Arc<Image>,
+    pub albedo: Arc<Image>,
+    pub emission: Arc<Image>,
+    pub surface: Arc<Image>,
     pub size: ImageSize,
 }
 
@@ -99,19 +97,16 @@ impl GBufferPass {
             limits.max_framebuffer_width,
             limits.max_framebuffer_height
         );
-        let image = |name: &str, format: vk::Format, usage: vk::ImageUsageFlags| {
-            Image::new(
-                device,
-                name,
-                ImageDesc {
-                    format,
-                    width: size.width,
-                    height: size.height,
-                    layers: 1,
-                    usage,
-                    view_type: vk::ImageViewType::TYPE_2D,
-                },
-            )
+        let image = |name: &str, format: vk::Format, usage: vk::ImageUsageFlags| -> Result<Arc<Image>> {
+            let desc = ImageDesc {
+                format,
+                width: size.width,
+                height: size.height,
+                layers: 1,
+                usage,
+                view_type: vk::ImageViewType::TYPE_2D,
+            };
+            Ok(Arc::new(Image::new(device, name, desc)?))
         };
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
@@ -123,8 +118,12 @@ impl GBufferPass {
             image("gbuffer surface id", COLOR_FORMATS[4], color)?,
         ];
         let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
-        let views = [position.view, normal.view, albedo.view, emission.view, surface.view, depth.view];
-        let framebuffer = Framebuffer::new(device, &self.render_pass, &views, position.extent(), 1)?;
+        let attachments = [&position, &normal, &albedo, &emission, &surface, &depth]
+            .into_iter()
+            .map(ImageView::whole)
+            .collect::<Result<Vec<_>>>()?;
+        // Dropped at the end of this function: the submission below is waited on.
+        let framebuffer = Framebuffer::new(device, &self.render_pass, attachments, 1)?;
 
         let push = GBufferPush { view_proj: camera.view_proj(size.width, size.height, near) };
         let zero = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
@@ -136,19 +135,15 @@ impl GBufferPass {
             vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ];
-        device.submit_and_wait(|cmd| {
-            framebuffer.begin(cmd, &self.render_pass, &clears);
-            self.pipeline.bind(device, cmd, vk::PipelineBindPoint::GRAPHICS, &self.layout, self.set);
-            scene.bind_vertices(device, cmd);
-            self.layout.push(cmd, &push);
-            // SAFETY: as above.
-            unsafe {
-                device.raw.cmd_draw(cmd, scene.vertex_count, 1, 0, 0);
-                device.raw.cmd_end_render_pass(cmd);
-            }
+        device.submit_and_wait(|enc| {
+            let pass = enc.begin_render_pass(&self.render_pass, &framebuffer, &clears, None);
+            pass.bind(&self.pipeline, &self.layout, self.set);
+            pass.bind_vertices(&scene.vertices);
+            pass.push(&self.layout, &push);
+            pass.draw(scene.vertex_count, 1, 0, 0);
             Ok(())
         })?;
-        Ok(GBuffer { _framebuffer: framebuffer, position, normal, albedo, emission, surface, _depth: depth, size })
+        Ok(GBuffer { position, normal, albedo, emission, surface, size })
     }
 }
 

@@ -10,7 +10,7 @@ use ash::vk;
 use crate::gpu_types::{GpuQuad, ImagePush};
 use crate::scene::ImageSize;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder};
 
 pub struct InterpolatePass {
     kernel: ComputeKernel,
@@ -27,6 +27,7 @@ impl InterpolatePass {
             shaders::INTERPOLATE_COMP,
             &[(0, storage), (1, storage)],
             size_of::<ImagePush>() as u32,
+            1,
         )?;
         Ok(Self { kernel, quads: None, count: 0 })
     }
@@ -34,20 +35,20 @@ impl InterpolatePass {
     /// Uploads `quads` and binds the radiance map they fill (call while the GPU is idle).
     pub fn bind(&mut self, device: &Arc<Device>, quads: &[GpuQuad], radiance: &Buffer) -> Result<()> {
         let buffer = Buffer::upload(device, "interpolated quads", quads, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        self.kernel.writer().storage_buffer(0, &buffer).storage_buffer(1, radiance).apply(device);
+        self.kernel.writer(0).storage_buffer(0, &buffer).storage_buffer(1, radiance).apply(device);
         self.quads = Some(buffer);
         self.count = quads.len() as u32;
         Ok(())
     }
 
-    pub fn record(&self, device: &Device, cmd: vk::CommandBuffer, size: ImageSize) {
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize) {
         if self.count == 0 {
             return;
         }
         // Workgroups beyond the per-dimension limit spill into y; the shader skips indices past `count`.
-        let max_x = device.adapter.limits.max_compute_work_group_count[0];
+        let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
         let groups = [self.count.min(max_x), self.count.div_ceil(max_x), 1];
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: self.count };
-        self.kernel.dispatch(device, cmd, &push, groups);
+        self.kernel.dispatch(enc, 0, &push, groups);
     }
 }

@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::obj::{Material, ObjGroup};
-use super::{Camera, ImageSize, Mesh, RenderDefaults, Scene};
+use super::{Camera, ImageSize, Mesh, Scene};
 
 /// Two triangles covering the rectangle `center ± half_u ± half_v`, wound so that the front faces `facing`.
 pub fn rect(center: Vec3, half_u: Vec3, half_v: Vec3, facing: Vec3) -> Vec<[Vec3; 3]> {
@@ -25,7 +25,7 @@ pub fn from_groups(
         .collect();
     let mut warnings = Vec::new();
     let mesh = Mesh::new(&groups, materials, &mut warnings).expect("built-in scenes have triangles");
-    Scene { path: "(built in)".into(), mesh, camera, image: size, render: RenderDefaults::default(), warnings }
+    Scene { path: "(built in)".into(), mesh, camera, image: size, render: toml::Table::new(), warnings }
 }
 
 /// A room open towards the camera, 2 × 2 × 2 units, with a red and a green wall, a large ceiling light

@@ -13,7 +13,8 @@
 //! [render]                      # optional; every key is also a CLI flag, which wins
 //! sensor = "hemicube"           # or "frustum"
 //! ```
-//! Unknown keys are errors (a typo must not silently fall back to a default).
+//! Unknown keys are errors (a typo must not silently fall back to a default). The `[render]` table is kept
+//! as written: the scene knows no render parameter; `params::Overrides` reads and checks it.
 
 use std::path::{Path, PathBuf};
 
@@ -27,8 +28,9 @@ pub struct SceneFile {
     pub mesh: PathBuf,
     pub camera: CameraSection,
     pub image: ImageSection,
+    /// Render parameters for this scene, uninterpreted here.
     #[serde(default)]
-    pub render: RenderDefaults,
+    pub render: toml::Table,
 }
 
 #[derive(Debug, Deserialize)]
@@ -50,22 +52,6 @@ fn default_up() -> [f32; 3] {
 pub struct ImageSection {
     pub width: u32,
     pub height: u32,
-}
-
-/// Scene-specific defaults for the algorithm's parameters; see `sensorlight render --help` for each.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderDefaults {
-    pub sensor: Option<String>,
-    pub fov_deg: Option<f32>,
-    pub sensor_size: Option<u32>,
-    pub tile: Option<u32>,
-    pub dradiance: Option<f32>,
-    pub epsilon: Option<f32>,
-    pub filter_radius: Option<u32>,
-    pub exposure: Option<f32>,
-    /// Radiance of rays that leave the scene, linear RGB.
-    pub background: Option<[f32; 3]>,
 }
 
 impl SceneFile {

@@ -14,7 +14,6 @@ use anyhow::{Context as _, Result, ensure};
 use glam::Vec3;
 
 pub use camera::Camera;
-pub use file::RenderDefaults;
 pub use obj::Material;
 pub use ray::Ray;
 
@@ -126,7 +125,8 @@ pub struct Scene {
     pub mesh: Mesh,
     pub camera: Camera,
     pub image: ImageSize,
-    pub render: RenderDefaults,
+    /// The scene file's `[render]` table, uninterpreted (read by `params::Overrides::from_scene_table`).
+    pub render: toml::Table,
     /// Warnings met while loading (undefined materials, dropped triangles, …).
     pub warnings: Vec<String>,
 }
@@ -144,9 +144,6 @@ impl Scene {
             "{}: [image] width and height must be at least 1",
             path.display()
         );
-        // The `[render]` values are checked here, with the file named, even where a flag later overrides one.
-        crate::params::RenderParams::resolve(&file.render, &Default::default())
-            .with_context(|| format!("{}: [render]", path.display()))?;
         let mesh_path = file.mesh_path(path);
         let obj = obj::load(&mesh_path)?;
         let mut warnings = obj.warnings;

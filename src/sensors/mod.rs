@@ -12,7 +12,18 @@ pub mod weights;
 
 use std::fmt;
 
-use anyhow::{Result, bail, ensure};
+use clap::ValueEnum;
+use serde::Deserialize;
+
+/// The shape of a sensor, as a user chooses it (a frustum's field of view is a parameter of its own).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum SensorShape {
+    /// The whole hemisphere: a front face and four half side faces (3 map layers).
+    Hemicube,
+    /// The paper's single square view of `--fov` degrees (1 layer; misses the hemisphere's rim).
+    Frustum,
+}
 
 /// What a sensor captures.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,19 +36,18 @@ pub enum SensorKind {
 }
 
 impl SensorKind {
-    pub const DEFAULT_FOV_DEG: f32 = 135.0;
+    /// A sensor of `shape`; `fov_deg` (in (0, 180), checked by the caller) applies to frustums only.
+    pub fn new(shape: SensorShape, fov_deg: f32) -> Self {
+        match shape {
+            SensorShape::Hemicube => Self::Hemicube,
+            SensorShape::Frustum => Self::Frustum { fov_deg },
+        }
+    }
 
-    /// `name` is "frustum" or "hemicube"; `fov_deg` applies to frustum sensors and must lie in (0, 180).
-    pub fn parse(name: &str, fov_deg: f32) -> Result<Self> {
-        // Checked for hemicubes too, which ignore it: a nonsense value is a mistake either way.
-        ensure!(
-            fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0,
-            "--fov must lie strictly between 0 and 180 degrees (a perspective view cannot see 180°), got {fov_deg}"
-        );
-        match name {
-            "frustum" => Ok(Self::Frustum { fov_deg }),
-            "hemicube" => Ok(Self::Hemicube),
-            other => bail!("unknown sensor kind '{other}': expected 'frustum' or 'hemicube'"),
+    pub fn shape(self) -> SensorShape {
+        match self {
+            Self::Hemicube => SensorShape::Hemicube,
+            Self::Frustum { .. } => SensorShape::Frustum,
         }
     }
 
@@ -51,17 +61,28 @@ impl SensorKind {
         layout::views(self).len() as u32
     }
 
-    /// Checks a sensor map size `rd` for this kind against the device's largest image side.
-    pub fn check_size(self, rd: u32, max_image_side: u32) -> Result<()> {
-        ensure!(rd >= 2, "--sensor-size must be at least 2 texels, got {rd}");
-        ensure!(rd <= max_image_side, "--sensor-size {rd} exceeds this device's largest image side ({max_image_side})");
-        if self == Self::Hemicube {
-            ensure!(
-                rd.is_multiple_of(2),
-                "--sensor-size must be even for hemicube sensors (two half faces share a layer), got {rd}"
-            );
+    /// What is wrong with a sensor map size `rd` for this kind on a device whose largest image side is
+    /// `max_image_side`, if anything (as a predicate: "must be even …").
+    pub fn size_problem(self, rd: u32, max_image_side: u32) -> Option<String> {
+        if rd < 2 {
+            return Some(format!("must be at least 2 texels, got {rd}"));
         }
-        Ok(())
+        if rd > max_image_side {
+            return Some(format!("{rd} exceeds this device's largest image side ({max_image_side})"));
+        }
+        if self == Self::Hemicube && !rd.is_multiple_of(2) {
+            return Some(format!("must be even for hemicube sensors (two half faces share a layer), got {rd}"));
+        }
+        None
+    }
+}
+
+impl fmt::Display for SensorShape {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Hemicube => "hemicube",
+            Self::Frustum => "frustum",
+        })
     }
 }
 

@@ -1,4 +1,6 @@
 //! Physical devices ("adapters"): what they are, the limits this program depends on, and which one to use.
+//! What the program needs of a device is stated by its callers ([`Requirements`]), so this layer knows no
+//! pass.
 
 use std::fmt;
 
@@ -27,6 +29,16 @@ pub struct Limits {
     pub timestamp_period: f32,
 }
 
+/// What the program needs of a device beyond Vulkan 1.2 with a graphics-and-compute queue: stated by the
+/// passes that use it (`passes::requirements`).
+#[derive(Clone, Debug, Default)]
+pub struct Requirements {
+    /// Image formats with the features used with them (optimal tiling).
+    pub formats: Vec<(vk::Format, vk::FormatFeatureFlags)>,
+    /// Colour attachments of the widest render pass.
+    pub color_attachments: u32,
+}
+
 /// Optional features; the device is created with every one that is present.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Features {
@@ -49,12 +61,14 @@ pub struct Adapter {
     pub api_version: u32,
     /// A queue family with graphics and compute, if any.
     pub queue_family: Option<u32>,
+    /// Valid bits of that family's timestamps; 0 where it cannot write timestamps.
+    pub timestamp_valid_bits: u32,
     /// Size of the largest device-local heap, in bytes.
     pub device_local_bytes: u64,
     pub limits: Limits,
     pub features: Features,
-    /// Formats the passes need (`passes::required_formats`) that this device lacks, with the missing use.
-    pub missing_formats: Vec<String>,
+    /// What [`Requirements`] asks for and this device lacks, in words.
+    pub missing: Vec<String>,
 }
 
 impl Adapter {
@@ -66,11 +80,8 @@ impl Adapter {
         if self.queue_family.is_none() {
             return Some("no queue family with graphics and compute".into());
         }
-        if self.limits.max_color_attachments < crate::passes::gbuffer::ATTACHMENT_COUNT {
-            return Some(format!("only {} colour attachments", self.limits.max_color_attachments));
-        }
-        if !self.missing_formats.is_empty() {
-            return Some(format!("unsupported formats: {}", self.missing_formats.join(", ")));
+        if !self.missing.is_empty() {
+            return Some(self.missing.join(", "));
         }
         None
     }
@@ -107,18 +118,18 @@ pub fn version_string(v: u32) -> String {
     format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
 }
 
-/// Every physical device the loader reports, in its order.
-pub fn enumerate(instance: &Instance) -> Result<Vec<Adapter>> {
+/// Every physical device the loader reports, in its order, each judged against `requirements`.
+pub fn enumerate(instance: &Instance, requirements: &Requirements) -> Result<Vec<Adapter>> {
     let raw = &instance.raw;
     // SAFETY: queries on a valid instance.
     let handles = unsafe { raw.enumerate_physical_devices() }?;
     if handles.is_empty() {
         bail!("no Vulkan device found; {INSTALL_HINT}");
     }
-    Ok(handles.into_iter().enumerate().map(|(index, handle)| describe(instance, index, handle)).collect())
+    Ok(handles.into_iter().enumerate().map(|(index, handle)| describe(instance, index, handle, requirements)).collect())
 }
 
-fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Adapter {
+fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice, requirements: &Requirements) -> Adapter {
     let raw = &instance.raw;
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut multiview = vk::PhysicalDeviceMultiviewProperties::default();
@@ -142,6 +153,7 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
     let l = &p.limits;
     let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
     let queue_family = families.iter().position(|f| f.queue_flags.contains(wanted)).map(|i| i as u32);
+    let timestamp_valid_bits = queue_family.map_or(0, |f| families[f as usize].timestamp_valid_bits);
     let device_local_bytes = memory.memory_heaps[..memory.memory_heap_count as usize]
         .iter()
         .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
@@ -150,15 +162,22 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
         .unwrap_or(0);
     let name = p.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let missing_formats = crate::passes::required_formats()
-        .into_iter()
-        .filter(|&(format, needed)| {
+    let mut missing: Vec<String> = requirements
+        .formats
+        .iter()
+        .filter(|&&(format, needed)| {
             // SAFETY: a query on a valid physical device.
             let have = unsafe { raw.get_physical_device_format_properties(handle, format) }.optimal_tiling_features;
             !have.contains(needed)
         })
-        .map(|(format, needed)| format!("{format:?} as {needed:?}"))
+        .map(|(format, needed)| format!("unsupported format {format:?} as {needed:?}"))
         .collect();
+    if p.limits.max_color_attachments < requirements.color_attachments {
+        missing.push(format!(
+            "only {} colour attachments (needs {})",
+            p.limits.max_color_attachments, requirements.color_attachments
+        ));
+    }
     let driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Adapter {
         index,
@@ -168,6 +187,7 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
         driver: format!("{driver_name} {driver_info}").trim().to_owned(),
         api_version: p.api_version,
         queue_family,
+        timestamp_valid_bits,
         device_local_bytes,
         limits: Limits {
             max_image_dimension_2d: l.max_image_dimension2_d,
@@ -190,18 +210,18 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Ad
             multiview: features11.multiview == vk::TRUE,
             shader_clip_distance: core_features.shader_clip_distance == vk::TRUE,
         },
-        missing_formats,
+        missing,
     }
 }
 
-/// The adapter to use: `requested` (an index from `sensorlight devices`) or the best supported one.
+/// The adapter to use: `requested` (an index into `adapters`) or the best supported one.
 pub fn select(adapters: &[Adapter], requested: Option<usize>) -> Result<&Adapter> {
     if let Some(index) = requested {
         let Some(adapter) = adapters.get(index) else {
-            bail!("--device {index}: there are only {} device(s); see `sensorlight devices`", adapters.len());
+            bail!("there is no device {index}: {} device(s) found", adapters.len());
         };
         if let Some(why) = adapter.unsupported_reason() {
-            bail!("--device {index} ({adapter}) cannot run sensorlight: {why}");
+            bail!("device {index} ({adapter}) cannot run sensorlight: {why}");
         }
         return Ok(adapter);
     }
@@ -216,7 +236,7 @@ pub fn select(adapters: &[Adapter], requested: Option<usize>) -> Result<&Adapter
 mod tests {
     use super::*;
 
-    fn adapter(index: usize, kind: vk::PhysicalDeviceType, missing_formats: &[&str]) -> Adapter {
+    fn adapter(index: usize, kind: vk::PhysicalDeviceType, missing: &[&str]) -> Adapter {
         Adapter {
             index,
             handle: vk::PhysicalDevice::null(),
@@ -225,10 +245,11 @@ mod tests {
             driver: "test".into(),
             api_version: vk::API_VERSION_1_3,
             queue_family: Some(0),
+            timestamp_valid_bits: 64,
             device_local_bytes: 1 << 30,
             limits: Limits { max_color_attachments: 8, ..Limits::default() },
             features: Features::default(),
-            missing_formats: missing_formats.iter().map(|s| s.to_string()).collect(),
+            missing: missing.iter().map(|s| s.to_string()).collect(),
         }
     }
 
@@ -236,7 +257,11 @@ mod tests {
     fn prefers_a_gpu_and_skips_devices_that_lack_a_format() {
         let cpu = adapter(0, vk::PhysicalDeviceType::CPU, &[]);
         let gpu = adapter(1, vk::PhysicalDeviceType::DISCRETE_GPU, &[]);
-        let no_depth = adapter(2, vk::PhysicalDeviceType::DISCRETE_GPU, &["D32_SFLOAT as DEPTH_STENCIL_ATTACHMENT"]);
+        let no_depth = adapter(
+            2,
+            vk::PhysicalDeviceType::DISCRETE_GPU,
+            &["unsupported format D32_SFLOAT as DEPTH_STENCIL_ATTACHMENT"],
+        );
         // In enumeration order, as `enumerate` returns them.
         let all = [cpu.clone(), gpu, no_depth.clone()];
         assert_eq!(select(&all, None).unwrap().index, 1);
@@ -246,8 +271,8 @@ mod tests {
         assert!(err.contains("D32_SFLOAT"), "{err}");
         assert_eq!(select(&all, Some(0)).unwrap().index, 0, "an explicit --device is honoured");
         let err = select(&all, Some(2)).unwrap_err().to_string();
-        assert!(err.contains("--device 2") && err.contains("unsupported formats"), "{err}");
+        assert!(err.contains("device 2") && err.contains("unsupported format"), "{err}");
         let err = select(&all, Some(7)).unwrap_err().to_string();
-        assert!(err.contains("only 3 device(s)"), "{err}");
+        assert!(err.contains("no device 7: 3 device(s) found"), "{err}");
     }
 }

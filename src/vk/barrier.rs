@@ -1,34 +1,108 @@
-//! Pipeline barriers between passes. Every pass here reads what the previous one wrote, in one queue.
+//! Pipeline barriers described by what the work on each side does, in the manner of vk-sync and kajiya: an
+//! [`Access`] names a pipeline stage and the memory access made there; a barrier between two lists of
+//! accesses waits for the stages of the first and makes its writes visible to the second. Callers never
+//! spell out stage and access masks, so a barrier reads like the dependency it expresses.
 
 use ash::vk;
 
-use super::device::Device;
+use super::encoder::Encoder;
+use super::image::Image;
 
-/// Makes `src` stage writes visible to `dst` stage reads and writes (a global memory barrier).
-pub fn memory(device: &Device, cmd: vk::CommandBuffer, src: vk::PipelineStageFlags, dst: vk::PipelineStageFlags) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
-    // SAFETY: recording into a command buffer in the recording state.
-    unsafe { device.raw.cmd_pipeline_barrier(cmd, src, dst, vk::DependencyFlags::empty(), &barrier, &[], &[]) };
+/// One kind of use of a resource by the GPU or the host.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// No earlier use: nothing to wait for (e.g. contents about to be discarded).
+    Nothing,
+    /// Storage buffers or images read by a compute shader.
+    ComputeRead,
+    /// Storage buffers or images written (or read and written) by a compute shader.
+    ComputeWrite,
+    /// Storage buffers read by a vertex shader (sensor views, surfaces).
+    VertexShaderRead,
+    /// Colour attachments written by a render pass (cleared and drawn).
+    ColorAttachmentWrite,
+    /// Depth attachments tested and written by a render pass.
+    DepthAttachment,
+    /// Indirect draw or dispatch arguments.
+    IndirectRead,
+    TransferRead,
+    TransferWrite,
+    HostRead,
+    HostWrite,
+    /// Anything, by any stage: the coarse dependency around one-off copies and uploads.
+    Any,
 }
 
-/// Compute writes → compute reads, the common case between compute passes.
-pub fn compute_to_compute(device: &Device, cmd: vk::CommandBuffer) {
-    memory(device, cmd, vk::PipelineStageFlags::COMPUTE_SHADER, vk::PipelineStageFlags::COMPUTE_SHADER);
+impl Access {
+    fn stage(self) -> vk::PipelineStageFlags {
+        use vk::PipelineStageFlags as S;
+        match self {
+            Self::Nothing => S::TOP_OF_PIPE,
+            Self::ComputeRead | Self::ComputeWrite => S::COMPUTE_SHADER,
+            Self::VertexShaderRead => S::VERTEX_SHADER,
+            Self::ColorAttachmentWrite => S::COLOR_ATTACHMENT_OUTPUT,
+            Self::DepthAttachment => S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
+            Self::IndirectRead => S::DRAW_INDIRECT,
+            Self::TransferRead | Self::TransferWrite => S::TRANSFER,
+            Self::HostRead | Self::HostWrite => S::HOST,
+            Self::Any => S::ALL_COMMANDS,
+        }
+    }
+
+    fn access(self) -> vk::AccessFlags {
+        use vk::AccessFlags as A;
+        match self {
+            Self::Nothing => A::empty(),
+            Self::ComputeRead | Self::VertexShaderRead => A::SHADER_READ,
+            Self::ComputeWrite => A::SHADER_READ | A::SHADER_WRITE,
+            Self::ColorAttachmentWrite => A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,
+            Self::DepthAttachment => A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            Self::IndirectRead => A::INDIRECT_COMMAND_READ,
+            Self::TransferRead => A::TRANSFER_READ,
+            Self::TransferWrite => A::TRANSFER_WRITE,
+            Self::HostRead => A::HOST_READ,
+            Self::HostWrite => A::HOST_WRITE,
+            Self::Any => A::MEMORY_READ | A::MEMORY_WRITE,
+        }
+    }
+
+    /// The writes of this access (reads need only an execution dependency, not a flush).
+    fn writes(self) -> vk::AccessFlags {
+        use vk::AccessFlags as A;
+        self.access()
+            & (A::SHADER_WRITE
+                | A::COLOR_ATTACHMENT_WRITE
+                | A::DEPTH_STENCIL_ATTACHMENT_WRITE
+                | A::TRANSFER_WRITE
+                | A::HOST_WRITE
+                | A::MEMORY_WRITE)
+    }
 }
 
-/// Compute or transfer writes → host reads after the fence.
-pub fn to_host(device: &Device, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+/// Stage and access masks of the two sides of a dependency.
+fn masks(
+    before: &[Access],
+    after: &[Access],
+) -> (vk::PipelineStageFlags, vk::AccessFlags, vk::PipelineStageFlags, vk::AccessFlags) {
+    let src_stage = before.iter().fold(vk::PipelineStageFlags::empty(), |m, a| m | a.stage());
+    let src_access = before.iter().fold(vk::AccessFlags::empty(), |m, a| m | a.writes());
+    let dst_stage = after.iter().fold(vk::PipelineStageFlags::empty(), |m, a| m | a.stage());
+    let dst_access = after.iter().fold(vk::AccessFlags::empty(), |m, a| m | a.access());
+    let or_top = |s: vk::PipelineStageFlags| if s.is_empty() { vk::PipelineStageFlags::TOP_OF_PIPE } else { s };
+    let or_bottom = |s: vk::PipelineStageFlags| if s.is_empty() { vk::PipelineStageFlags::BOTTOM_OF_PIPE } else { s };
+    (or_top(src_stage), src_access, or_bottom(dst_stage), dst_access)
+}
+
+/// Makes every `before` access happen before every `after` access (a global memory barrier).
+pub fn global(enc: &Encoder<'_>, before: &[Access], after: &[Access]) {
+    let (src_stage, src_access, dst_stage, dst_access) = masks(before, after);
+    let barrier = [vk::MemoryBarrier::default().src_access_mask(src_access).dst_access_mask(dst_access)];
     // SAFETY: recording into a command buffer in the recording state.
     unsafe {
-        device.raw.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
+        enc.device().raw.cmd_pipeline_barrier(
+            enc.raw(),
+            src_stage,
+            dst_stage,
             vk::DependencyFlags::empty(),
             &barrier,
             &[],
@@ -37,66 +111,54 @@ pub fn to_host(device: &Device, cmd: vk::CommandBuffer) {
     };
 }
 
-/// Transitions a whole image from `UNDEFINED` (contents discarded) to `GENERAL`, after `src` work.
-pub fn discard_to_general(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
+/// Like [`global`] for the layers `range` of `image`, changing their layout from `old` to `new`
+/// (`UNDEFINED` discards the contents).
+pub fn image(
+    enc: &Encoder<'_>,
+    image: &Image,
     range: vk::ImageSubresourceRange,
-    src: vk::PipelineStageFlags,
+    (before, old): (&[Access], vk::ImageLayout),
+    (after, new): (&[Access], vk::ImageLayout),
 ) {
+    let (src_stage, src_access, dst_stage, dst_access) = masks(before, after);
     let barrier = [vk::ImageMemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::empty())
-        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
-        .old_layout(vk::ImageLayout::UNDEFINED)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(range)];
-    // SAFETY: recording into a command buffer in the recording state.
-    unsafe {
-        device.raw.cmd_pipeline_barrier(
-            cmd,
-            src,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &barrier,
-        )
-    };
-}
-
-/// Changes an image's layout, ordering all earlier work before all later work on it (coarse but simple:
-/// used around read-backs, not inside the sensor loop).
-pub fn layout(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    range: vk::ImageSubresourceRange,
-    old: vk::ImageLayout,
-    new: vk::ImageLayout,
-) {
-    let barrier = [vk::ImageMemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
-        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+        .src_access_mask(src_access)
+        .dst_access_mask(dst_access)
         .old_layout(old)
         .new_layout(new)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
+        .image(image.raw)
         .subresource_range(range)];
-    // SAFETY: recording into a command buffer in the recording state.
+    // SAFETY: recording into a command buffer in the recording state; the image outlives the submission
+    // (its owner waits for the GPU before dropping it).
     unsafe {
-        device.raw.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::ALL_COMMANDS,
-            vk::PipelineStageFlags::ALL_COMMANDS,
+        enc.device().raw.cmd_pipeline_barrier(
+            enc.raw(),
+            src_stage,
+            dst_stage,
             vk::DependencyFlags::empty(),
             &[],
             &[],
             &barrier,
         )
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_wait_without_flushing_and_empty_sides_become_top_and_bottom() {
+        let (src, src_access, dst, dst_access) = masks(&[Access::ComputeRead], &[Access::ColorAttachmentWrite]);
+        assert_eq!(src, vk::PipelineStageFlags::COMPUTE_SHADER);
+        assert!(src_access.is_empty(), "a read has nothing to make visible");
+        assert_eq!(dst, vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT);
+        assert!(dst_access.contains(vk::AccessFlags::COLOR_ATTACHMENT_WRITE));
+        let (src, _, dst, _) = masks(&[], &[]);
+        assert_eq!((src, dst), (vk::PipelineStageFlags::TOP_OF_PIPE, vk::PipelineStageFlags::BOTTOM_OF_PIPE));
+        let (_, src_access, _, _) = masks(&[Access::ComputeWrite, Access::TransferWrite], &[Access::HostRead]);
+        assert_eq!(src_access, vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE);
+    }
 }

@@ -80,10 +80,8 @@ impl Buffer {
             MemoryLocation::CpuToGpu,
         )?;
         staging.write(0, data)?;
-        device.submit_and_wait(|cmd| {
-            let region = [vk::BufferCopy::default().size(bytes.len() as u64)];
-            // SAFETY: both buffers are alive until the wait returns.
-            unsafe { device.raw.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+        device.submit_and_wait(|enc| {
+            enc.copy(&staging, &buffer, bytes.len() as u64);
             Ok(())
         })?;
         Ok(buffer)

@@ -1,5 +1,5 @@
-//! A compute kernel: one shader, its descriptor set and pipeline. The compute passes are thin wrappers
-//! that say what they bind and how many workgroups they launch.
+//! A compute kernel: one shader, its pipeline, and descriptor sets for it. The compute passes are thin
+//! wrappers that say what they bind and how many workgroups they launch.
 
 use std::sync::Arc;
 
@@ -8,23 +8,26 @@ use ash::vk;
 
 use super::descriptor::{DescriptorPool, SetWriter};
 use super::device::Device;
+use super::encoder::Encoder;
 use super::pipeline::{Binding, Pipeline, PipelineLayout};
 
 pub struct ComputeKernel {
-    // Field order is drop order: pipeline, then its set's pool, then the layout.
+    // Field order is drop order: pipeline, then its sets' pool, then the layout.
     pipeline: Pipeline,
     _pool: DescriptorPool,
-    pub set: vk::DescriptorSet,
-    pub layout: PipelineLayout,
+    sets: Vec<vk::DescriptorSet>,
+    layout: PipelineLayout,
 }
 
 impl ComputeKernel {
-    /// `bindings`: (binding, type) pairs, all for the compute stage; `push_bytes`: push-constant size.
+    /// `bindings`: (binding, type) pairs, all for the compute stage; `push_bytes`: push-constant size;
+    /// `sets`: how many descriptor sets (e.g. one per batch in flight), addressed by index.
     pub fn new(
         device: &Arc<Device>,
         spirv: &[u8],
         bindings: &[(u32, vk::DescriptorType)],
         push_bytes: u32,
+        sets: u32,
     ) -> Result<Self> {
         let stage = vk::ShaderStageFlags::COMPUTE;
         let full: Vec<Binding> = bindings.iter().map(|&(b, ty)| (b, ty, stage)).collect();
@@ -36,23 +39,22 @@ impl ComputeKernel {
                 None => per_type.push((ty, 1)),
             }
         }
-        let pool = DescriptorPool::new(device, 1, &per_type)?;
-        let set = pool.allocate(&layout)?;
+        let pool = DescriptorPool::new(device, sets, &per_type)?;
+        let sets = (0..sets).map(|_| pool.allocate(&layout)).collect::<Result<Vec<_>>>()?;
         let pipeline = Pipeline::compute(device, &layout, spirv)?;
-        Ok(Self { pipeline, _pool: pool, set, layout })
+        Ok(Self { pipeline, _pool: pool, sets, layout })
     }
 
-    /// Starts the writes to this kernel's descriptor set (apply them while the GPU is not using it).
-    pub fn writer(&self) -> SetWriter {
-        SetWriter::new(self.set)
+    /// Starts the writes to descriptor set `set` (apply them while the GPU is not using that set).
+    pub fn writer(&self, set: usize) -> SetWriter {
+        SetWriter::new(self.sets[set])
     }
 
-    /// Records bind, push constants and a dispatch of `groups` workgroups.
-    pub fn dispatch<T: bytemuck::Pod>(&self, device: &Device, cmd: vk::CommandBuffer, push: &T, groups: [u32; 3]) {
-        self.pipeline.bind(device, cmd, vk::PipelineBindPoint::COMPUTE, &self.layout, self.set);
-        self.layout.push(cmd, push);
-        // SAFETY: as above.
-        unsafe { device.raw.cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+    /// Records bind (with descriptor set `set`), push constants and a dispatch of `groups` workgroups.
+    pub fn dispatch<T: bytemuck::Pod>(&self, enc: &Encoder<'_>, set: usize, push: &T, groups: [u32; 3]) {
+        enc.bind(vk::PipelineBindPoint::COMPUTE, &self.pipeline, &self.layout, self.sets[set]);
+        enc.push(&self.layout, push);
+        enc.dispatch(groups);
     }
 }
 

@@ -9,7 +9,8 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
-use super::adapter::{self, Adapter};
+use super::adapter::{self, Adapter, Requirements};
+use super::encoder::Encoder;
 use super::instance::Instance;
 use super::validation::ValidationLog;
 
@@ -20,20 +21,23 @@ pub struct DeviceOptions {
     pub validation: bool,
     /// Index from `sensorlight devices`; `None` picks the best supported device.
     pub device_index: Option<usize>,
+    /// What the program's passes need; devices lacking any of it are skipped with the reason.
+    pub requirements: Requirements,
 }
 
 impl DeviceOptions {
     /// Validation from `SENSORLIGHT_VALIDATION=1`, device from the `--device` flag.
-    pub fn from_env(device_index: Option<usize>) -> Self {
+    pub fn from_env(device_index: Option<usize>, requirements: Requirements) -> Self {
         let validation = std::env::var("SENSORLIGHT_VALIDATION").is_ok_and(|v| v == "1");
-        Self { validation, device_index }
+        Self { validation, device_index, requirements }
     }
 }
 
 pub struct Device {
     pub raw: ash::Device,
     pub adapter: Adapter,
-    pub queue: vk::Queue,
+    /// Submissions to a queue must not overlap (Vulkan's external synchronisation rule).
+    queue: Mutex<vk::Queue>,
     pub queue_family: u32,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     submitter: Mutex<Submitter>,
@@ -51,7 +55,7 @@ struct Submitter {
 impl Device {
     pub fn new(options: &DeviceOptions) -> Result<Arc<Self>> {
         let instance = Instance::new(options.validation)?;
-        let adapters = adapter::enumerate(&instance)?;
+        let adapters = adapter::enumerate(&instance, &options.requirements)?;
         let adapter = adapter::select(&adapters, options.device_index)?.clone();
         let queue_family = adapter.queue_family.expect("selected adapters have a queue family");
 
@@ -99,7 +103,7 @@ impl Device {
         Ok(Arc::new(Self {
             raw,
             adapter,
-            queue,
+            queue: Mutex::new(queue),
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             submitter: Mutex::new(submitter),
@@ -116,9 +120,9 @@ impl Device {
         self.allocator.lock().unwrap()
     }
 
-    /// Records `record` into a command buffer, submits it and waits. Returns the host time from submission to
-    /// the fence (the GPU time on a device that runs nothing else, e.g. lavapipe).
-    pub fn submit_and_wait(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<()>) -> Result<Duration> {
+    /// Records `record` into a command buffer, submits it and waits: for one-off work (uploads,
+    /// read-backs). Returns the host time from submission to the fence.
+    pub fn submit_and_wait(&self, record: impl FnOnce(&Encoder<'_>) -> Result<()>) -> Result<Duration> {
         let submitter = self.submitter.lock().unwrap();
         let cmd = submitter.cmd;
         // SAFETY: the command buffer is only used under the mutex and is idle (its fence was waited on).
@@ -127,20 +131,27 @@ impl Device {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             self.raw.begin_command_buffer(cmd, &begin)?;
         }
-        let recorded = record(cmd);
+        let recorded = record(&Encoder::new(self, cmd));
         // SAFETY: as above; the buffer is ended even when recording failed so that it can be reset later.
         unsafe { self.raw.end_command_buffer(cmd)? };
         recorded?;
-        let cmds = [cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
         let start = Instant::now();
-        // SAFETY: the fence is unsignalled (reset after each wait) and owned by this submitter.
+        self.submit(cmd, submitter.fence)?;
+        // SAFETY: the fence is owned by this submitter and was just submitted.
         unsafe {
-            self.raw.queue_submit(self.queue, &submit, submitter.fence).context("vkQueueSubmit")?;
             self.raw.wait_for_fences(&[submitter.fence], true, u64::MAX).context("vkWaitForFences")?;
             self.raw.reset_fences(&[submitter.fence])?;
         }
         Ok(start.elapsed())
+    }
+
+    /// Submits one recorded command buffer that signals `fence` (unsignalled) when done.
+    pub(crate) fn submit(&self, cmd: vk::CommandBuffer, fence: vk::Fence) -> Result<()> {
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let queue = self.queue.lock().unwrap();
+        // SAFETY: the queue is used under its mutex; the command buffer is recorded and the fence unsignalled.
+        unsafe { self.raw.queue_submit(*queue, &submit, fence) }.context("vkQueueSubmit")
     }
 }
 

@@ -105,13 +105,6 @@ impl Image {
         Ok(unsafe { self.device.raw.create_image_view(&info, None) }?)
     }
 
-    /// An owned 2D-array view of `count` layers from `first`, e.g. one batch of a layered framebuffer.
-    pub fn layer_view(&self, first: u32, count: u32) -> Result<ImageView> {
-        ensure!(first + count <= self.desc.layers, "layers {first}..{} out of {}", first + count, self.desc.layers);
-        let raw = self.create_view(vk::ImageViewType::TYPE_2D_ARRAY, first, count)?;
-        Ok(ImageView { device: self.device.clone(), raw })
-    }
-
     pub fn range(&self, first: u32, count: u32) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange::default()
             .aspect_mask(aspect_of(self.desc.format))
@@ -141,15 +134,35 @@ impl Drop for Image {
     }
 }
 
-/// An extra view of an [`Image`]; must be dropped before the image (hold it in a field declared earlier).
+/// A view of some layers of an image that keeps the image alive: a framebuffer owns the views it was made
+/// from, so no field order has to keep an image from being destroyed under its views.
 pub struct ImageView {
-    device: Arc<Device>,
+    image: Arc<Image>,
     pub raw: vk::ImageView,
+}
+
+impl ImageView {
+    /// A 2D-array view of layers `first..first + count` of `image`.
+    pub fn layers(image: &Arc<Image>, first: u32, count: u32) -> Result<Self> {
+        ensure!(first + count <= image.desc.layers, "layers {first}..{} out of {}", first + count, image.desc.layers);
+        let raw = image.create_view(vk::ImageViewType::TYPE_2D_ARRAY, first, count)?;
+        Ok(Self { image: image.clone(), raw })
+    }
+
+    /// A view of all of `image`, of its own view type.
+    pub fn whole(image: &Arc<Image>) -> Result<Self> {
+        let raw = image.create_view(image.desc.view_type, 0, image.desc.layers)?;
+        Ok(Self { image: image.clone(), raw })
+    }
+
+    pub fn image(&self) -> &Arc<Image> {
+        &self.image
+    }
 }
 
 impl Drop for ImageView {
     fn drop(&mut self) {
-        // SAFETY: owners wait for the GPU before dropping what it uses.
-        unsafe { self.device.raw.destroy_image_view(self.raw, None) };
+        // SAFETY: owners wait for the GPU before dropping what it uses; the image outlives this view.
+        unsafe { self.image.device.raw.destroy_image_view(self.raw, None) };
     }
 }

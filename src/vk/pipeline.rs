@@ -55,12 +55,6 @@ impl PipelineLayout {
         };
         Ok(Self { device: device.clone(), set_layout, raw, push_stages })
     }
-
-    /// Records `vkCmdPushConstants` with the bytes of `value`.
-    pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, value: &T) {
-        // SAFETY: the range was declared with at least `size_of::<T>()` bytes by the pass that owns this layout.
-        unsafe { self.device.raw.cmd_push_constants(cmd, self.raw, self.push_stages, 0, bytemuck::bytes_of(value)) };
-    }
 }
 
 impl Drop for PipelineLayout {
@@ -113,22 +107,6 @@ impl Drop for Pipeline {
 }
 
 impl Pipeline {
-    /// Binds this pipeline at `bind_point` and `set` as set 0 of `layout`.
-    pub fn bind(
-        &self,
-        device: &Device,
-        cmd: vk::CommandBuffer,
-        bind_point: vk::PipelineBindPoint,
-        layout: &PipelineLayout,
-        set: vk::DescriptorSet,
-    ) {
-        // SAFETY: recording state; owners keep the pipeline, layout and set alive until the GPU is done.
-        unsafe {
-            device.raw.cmd_bind_pipeline(cmd, bind_point, self.raw);
-            device.raw.cmd_bind_descriptor_sets(cmd, bind_point, layout.raw, 0, &[set], &[]);
-        }
-    }
-
     pub fn compute(device: &Arc<Device>, layout: &PipelineLayout, spirv: &[u8]) -> Result<Self> {
         let module = ShaderModule::new(device, spirv)?;
         let info = [vk::ComputePipelineCreateInfo::default()

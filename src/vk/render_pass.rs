@@ -2,10 +2,11 @@
 
 use std::sync::Arc;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use ash::vk;
 
 use super::device::Device;
+use super::image::ImageView;
 
 pub struct RenderPass {
     device: Arc<Device>,
@@ -100,71 +101,41 @@ impl RenderPass {
 
 impl Drop for RenderPass {
     fn drop(&mut self) {
-        // SAFETY: framebuffers and pipelines made from it are owned by the same pass and dropped first.
+        // SAFETY: no pending command buffer uses it (its owner waits for the GPU first); framebuffers and
+        // pipelines made from it may outlive it.
         unsafe { self.device.raw.destroy_render_pass(self.raw, None) };
     }
 }
 
+/// A framebuffer and the views it draws into (which keep their images alive).
 pub struct Framebuffer {
     device: Arc<Device>,
     pub raw: vk::Framebuffer,
     pub extent: vk::Extent2D,
+    _attachments: Vec<ImageView>,
 }
 
 impl Framebuffer {
-    /// `layers` > 1 for layered rendering (`gl_Layer`); 1 for single-layer and multiview passes.
-    pub fn new(
-        device: &Arc<Device>,
-        pass: &RenderPass,
-        views: &[vk::ImageView],
-        extent: vk::Extent2D,
-        layers: u32,
-    ) -> Result<Self> {
+    /// A framebuffer of `pass` over `attachments` (in the pass's order; their images' extent); `layers` > 1
+    /// for layered rendering (`gl_Layer`), 1 for single-layer and multiview passes.
+    pub fn new(device: &Arc<Device>, pass: &RenderPass, attachments: Vec<ImageView>, layers: u32) -> Result<Self> {
+        let extent = attachments.first().map(|a| a.image().extent()).context("a framebuffer needs attachments")?;
+        let views: Vec<vk::ImageView> = attachments.iter().map(|a| a.raw).collect();
         let info = vk::FramebufferCreateInfo::default()
             .render_pass(pass.raw)
-            .attachments(views)
+            .attachments(&views)
             .width(extent.width)
             .height(extent.height)
             .layers(layers);
-        // SAFETY: the views are alive and match the pass's attachments.
+        // SAFETY: the views are alive (owned below) and match the pass's attachments.
         let raw = unsafe { device.raw.create_framebuffer(&info, None) }?;
-        Ok(Self { device: device.clone(), raw, extent })
-    }
-
-    /// Begins `pass` on this framebuffer with the given clear values and sets the full viewport and scissor.
-    pub fn begin(&self, cmd: vk::CommandBuffer, pass: &RenderPass, clears: &[vk::ClearValue]) {
-        self.begin_area(cmd, pass, clears, self.extent);
-    }
-
-    /// Like [`Framebuffer::begin`], but clears and draws only the top-left `area` (the viewport stays whole,
-    /// so clip space keeps mapping to the full framebuffer).
-    pub fn begin_area(&self, cmd: vk::CommandBuffer, pass: &RenderPass, clears: &[vk::ClearValue], area: vk::Extent2D) {
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: area };
-        let info = vk::RenderPassBeginInfo::default()
-            .render_pass(pass.raw)
-            .framebuffer(self.raw)
-            .render_area(area)
-            .clear_values(clears);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: self.extent.width as f32,
-            height: self.extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        // SAFETY: recording into a command buffer in the recording state.
-        unsafe {
-            self.device.raw.cmd_begin_render_pass(cmd, &info, vk::SubpassContents::INLINE);
-            self.device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
-            self.device.raw.cmd_set_scissor(cmd, 0, &[area]);
-        }
+        Ok(Self { device: device.clone(), raw, extent, _attachments: attachments })
     }
 }
 
 impl Drop for Framebuffer {
     fn drop(&mut self) {
-        // SAFETY: owners wait for the GPU before dropping what it uses.
+        // SAFETY: owners wait for the GPU before dropping what it uses; the views are dropped after this.
         unsafe { self.device.raw.destroy_framebuffer(self.raw, None) };
     }
 }

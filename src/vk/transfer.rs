@@ -6,7 +6,7 @@ use anyhow::Result;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::barrier;
+use super::barrier::{self, Access};
 use super::buffer::Buffer;
 use super::device::Device;
 use super::image::Image;
@@ -53,23 +53,16 @@ pub fn read_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image) -> Resu
         vk::BufferUsageFlags::TRANSFER_DST,
         MemoryLocation::GpuToCpu,
     )?;
-    device.submit_and_wait(|cmd| {
+    device.submit_and_wait(|enc| {
         let range = image.full_range();
         let region = [whole_image(image)];
+        let (general, source) = (vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
         // Every pass leaves its images in GENERAL; copies read best from TRANSFER_SRC_OPTIMAL.
-        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+        barrier::image(enc, image, range, (&[Access::Any], general), (&[Access::TransferRead], source));
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL now; the buffer is large enough.
-        unsafe {
-            device.raw.cmd_copy_image_to_buffer(
-                cmd,
-                image.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                staging.raw,
-                &region,
-            )
-        };
-        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::GENERAL);
-        barrier::to_host(device, cmd);
+        unsafe { device.raw.cmd_copy_image_to_buffer(enc.raw(), image.raw, source, staging.raw, &region) };
+        barrier::image(enc, image, range, (&[Access::TransferRead], source), (&[Access::Any], general));
+        barrier::global(enc, &[Access::TransferWrite], &[Access::HostRead]);
         Ok(())
     })?;
     staging.read(count)
@@ -82,13 +75,11 @@ pub fn read_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, coun
     let staging =
         Buffer::new(device, "buffer read-back", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
     if bytes > 0 {
-        device.submit_and_wait(|cmd| {
+        device.submit_and_wait(|enc| {
             // Writes of earlier submissions (e.g. compute passes) become visible to this copy.
-            barrier::memory(device, cmd, vk::PipelineStageFlags::ALL_COMMANDS, vk::PipelineStageFlags::TRANSFER);
-            let region = [vk::BufferCopy::default().size(bytes)];
-            // SAFETY: both buffers are alive until the wait returns; sizes checked above.
-            unsafe { device.raw.cmd_copy_buffer(cmd, buffer.raw, staging.raw, &region) };
-            barrier::to_host(device, cmd);
+            barrier::global(enc, &[Access::Any], &[Access::TransferRead]);
+            enc.copy(buffer, &staging, bytes);
+            barrier::global(enc, &[Access::TransferWrite], &[Access::HostRead]);
             Ok(())
         })?;
     }
@@ -108,28 +99,26 @@ pub fn write_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image, data: 
         MemoryLocation::CpuToGpu,
     )?;
     staging.write(0, data)?;
-    device.submit_and_wait(|cmd| {
+    device.submit_and_wait(|enc| {
         let range = image.full_range();
         let region = [whole_image(image)];
-        barrier::layout(
-            device,
-            cmd,
-            image.raw,
+        let target = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+        barrier::image(
+            enc,
+            image,
             range,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            (&[Access::Any], vk::ImageLayout::UNDEFINED),
+            (&[Access::TransferWrite], target),
         );
         // SAFETY: the image is in TRANSFER_DST_OPTIMAL; the buffer holds exactly the image's texels.
-        unsafe {
-            device.raw.cmd_copy_buffer_to_image(
-                cmd,
-                staging.raw,
-                image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &region,
-            )
-        };
-        barrier::layout(device, cmd, image.raw, range, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
+        unsafe { device.raw.cmd_copy_buffer_to_image(enc.raw(), staging.raw, image.raw, target, &region) };
+        barrier::image(
+            enc,
+            image,
+            range,
+            (&[Access::TransferWrite], target),
+            (&[Access::Any], vk::ImageLayout::GENERAL),
+        );
         Ok(())
     })?;
     Ok(())

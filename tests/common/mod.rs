@@ -10,8 +10,9 @@ use sensorlight::vk::{Device, DeviceOptions};
 /// Runs `work` on the default device with the Khronos validation layer on, then destroys the device and
 /// fails the test if the layer reported anything (including objects left undestroyed).
 pub fn gpu<R>(work: impl FnOnce(&Arc<Device>) -> R) -> R {
-    let device = Device::new(&DeviceOptions { validation: true, device_index: None })
-        .expect("tests need a Vulkan device and the validation layer (see README)");
+    let options =
+        DeviceOptions { validation: true, device_index: None, requirements: sensorlight::passes::requirements() };
+    let device = Device::new(&options).expect("tests need a Vulkan device and the validation layer (see README)");
     let log = device.validation_log().clone();
     let result = work(&device);
     drop(device);
@@ -64,9 +65,13 @@ pub fn project(path: &str) -> PathBuf {
 }
 
 use glam::Vec3;
+use sensorlight::params::{EstimatorParams, FrameParams};
+use sensorlight::renderer::{Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
 use sensorlight::scene::obj::Material;
 use sensorlight::scene::{Camera, ImageSize, Scene};
+use sensorlight::sensors::SensorKind;
+use sensorlight::strategy::StrategyKind;
 
 pub fn material(name: &str, kd: f32, ke: f32) -> Material {
     Material { name: name.into(), kd: Vec3::splat(kd), ke: Vec3::splat(ke) }
@@ -100,38 +105,30 @@ pub fn lightbox(size: (u32, u32)) -> Scene {
     builtin_lightbox(ImageSize { width: size.0, height: size.1 })
 }
 
+/// What a test renders with: the estimator, the sensor map size and the per-render parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct Setup {
+    pub estimator: EstimatorParams,
+    pub rd: u32,
+    pub frame: FrameParams,
+}
+
 /// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
-pub fn every_pixel(
-    sensor: sensorlight::sensors::SensorKind,
-    rd: u32,
-    epsilon: f32,
-) -> sensorlight::params::RenderParams {
-    sensorlight::params::RenderParams {
-        estimator: sensorlight::params::EstimatorParams { sensor, epsilon, background: Vec3::ZERO },
-        sensor_size: rd,
-        tile: 1,
-        dradiance: 0.0,
-        filter_radius: 0,
-        exposure: 0.0,
+pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
+    Setup {
+        estimator: EstimatorParams { sensor, epsilon, background: Vec3::ZERO },
+        rd,
+        frame: FrameParams { epsilon, background: Vec3::ZERO, tile: 1, dradiance: 0.0, filter_radius: 0 },
     }
 }
 
-/// Renders `scene` on a validated GPU.
-pub fn render(
-    scene: &Scene,
-    params: &sensorlight::params::RenderParams,
-    budget: Option<u64>,
-) -> sensorlight::renderer::RenderOutput {
+/// Renders `scene` on a validated GPU with the default strategy (unchecked: the strategy tests check it).
+pub fn render(scene: &Scene, setup: &Setup, budget: Option<u64>) -> RenderOutput {
     gpu(|device| {
-        let mut renderer = sensorlight::renderer::Renderer::new(
-            device,
-            scene,
-            params.estimator.sensor,
-            params.sensor_size,
-            budget,
-            Default::default(),
-        )
-        .unwrap();
-        renderer.render(scene, scene.image, params, &sensorlight::renderer::Quiet).unwrap()
+        let mut renderer = Renderer::builder(device, scene, setup.estimator.sensor, setup.rd)
+            .memory_budget(budget)
+            .build_unchecked(StrategyKind::default())
+            .unwrap();
+        renderer.render(scene.image, &setup.frame, &Quiet).unwrap()
     })
 }

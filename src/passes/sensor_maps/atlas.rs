@@ -7,23 +7,21 @@
 //! worker threads busy, and a smaller batch clears only the rows it uses.
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{Result, ensure};
 use ash::vk;
 
-use super::{MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::{Device, Framebuffer, Image};
+use crate::strategy::StrategyKind;
+use crate::vk::{Device, Encoder};
 
 pub struct Atlas {
-    framebuffer: Framebuffer,
     pipeline: SensorPipeline,
-    images: MapImages,
     layouts: Vec<ViewLayout>,
     desc: StrategyDesc,
     columns: u32,
@@ -45,22 +43,12 @@ impl Atlas {
             "an atlas of {layers} tiles of {}² does not fit a framebuffer",
             desc.rd
         );
-        let capacity = (max_columns * max_rows / layers).min(desc.sensors_in_budget(device)?).max(1);
+        let capacity = (max_columns * max_rows / layers).min(desc.batch_limit(device)?).max(1);
         let tiles = capacity * layers;
         let columns = tiles.min(max_columns);
         let rows = tiles.div_ceil(columns);
-        let layouts = views(desc.sensor);
-        let pipeline =
-            SensorPipeline::new(device, scene, shaders::SENSOR_ATLAS_VERT, 0, (capacity as usize) * layouts.len())?;
-        let images = MapImages::new(device, columns * desc.rd, rows * desc.rd, 1)?;
-        let framebuffer = Framebuffer::new(
-            device,
-            &pipeline.render_pass,
-            &[images.maps.view, images.depth.view],
-            images.maps.extent(),
-            1,
-        )?;
-        Ok(Self { framebuffer, pipeline, images, layouts, desc, columns, rows, capacity })
+        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_ATLAS_VERT, 0)?;
+        Ok(Self { pipeline, layouts: views(desc.sensor), desc, columns, rows, capacity })
     }
 }
 
@@ -73,33 +61,32 @@ impl Strategy for Atlas {
         self.capacity
     }
 
-    fn maps(&self) -> (&Image, u32) {
-        (&self.images.maps, self.columns)
+    fn map_layout(&self) -> MapLayout {
+        MapLayout::Atlas { columns: self.columns }
     }
 
-    fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
+    fn new_slot(&self) -> Result<SlotMaps> {
+        let size = (self.columns * self.desc.rd, self.rows * self.desc.rd, 1);
+        let mut slot = SlotMaps::new(&self.pipeline, size, self.capacity as usize * self.layouts.len())?;
+        slot.framebuffers = vec![slot.whole_framebuffer(&self.pipeline)?];
+        Ok(slot)
+    }
+
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
         let layers = self.desc.layers();
-        self.pipeline.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
+        slot.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
         let count = frames.len() as u32;
-        let (device, pipeline) = (ctx.device, &self.pipeline);
         // Only the rows of tiles this batch uses are cleared and drawn.
         let rows_used = (count * layers).div_ceil(self.columns);
         let area = vk::Extent2D { width: self.columns * self.desc.rd, height: rows_used * self.desc.rd };
+        let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[0], ck, Some(area));
         let push = SensorPush {
-            epsilon: ctx.epsilon,
+            epsilon: ck.epsilon,
             atlas_columns: self.columns,
             atlas_rows: self.rows,
             ..Default::default()
         };
-        let view_count = self.layouts.len() as u32;
-        device.submit_and_wait(|cmd| {
-            self.framebuffer.begin_area(cmd, &pipeline.render_pass, &MapImages::clears(ctx.background), area);
-            pipeline.bind(device, cmd, ctx.scene);
-            pipeline.draw(device, cmd, ctx.scene, &push, count * view_count, 0);
-            // SAFETY: recording state, inside the render pass begun above.
-            unsafe { device.raw.cmd_end_render_pass(cmd) };
-            ctx.reduce.record(device, cmd, 0, count);
-            Ok(())
-        })
+        self.pipeline.draw(&pass, &push, count * self.layouts.len() as u32, 0);
+        Ok(())
     }
 }

@@ -6,25 +6,20 @@
 //! ```
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{LayerFramebuffer, MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::{Device, Framebuffer, Image};
+use crate::strategy::StrategyKind;
+use crate::vk::{Device, Encoder};
 
 pub struct Layered {
-    // Field order is drop order: framebuffers before the images they view.
-    framebuffer: Framebuffer,
-    /// A framebuffer over the first layers only, for a smaller batch (so unused layers are not cleared).
-    partial: Option<(u32, LayerFramebuffer)>,
     pipeline: SensorPipeline,
-    images: MapImages,
     layouts: Vec<ViewLayout>,
     desc: StrategyDesc,
     capacity: u32,
@@ -36,38 +31,9 @@ impl Layered {
         let layers = desc.layers();
         let by_layers = limits.max_framebuffer_layers.min(limits.max_image_array_layers) / layers;
         ensure!(by_layers >= 1, "this device cannot render {layers} layers in one pass");
-        let capacity = by_layers.min(desc.sensors_in_budget(device)?);
-        let layouts = views(desc.sensor);
-        let pipeline =
-            SensorPipeline::new(device, scene, shaders::SENSOR_LAYERED_VERT, 0, (capacity as usize) * layouts.len())?;
-        let images = MapImages::new(device, desc.rd, desc.rd, capacity * layers)?;
-        let extent = images.maps.extent();
-        let framebuffer = Framebuffer::new(
-            device,
-            &pipeline.render_pass,
-            &[images.maps.view, images.depth.view],
-            extent,
-            capacity * layers,
-        )?;
-        Ok(Self { framebuffer, partial: None, pipeline, images, layouts, desc, capacity })
-    }
-
-    /// Makes sure a framebuffer over the first `count` sensors exists (see [`Layered::framebuffer`]).
-    fn prepare_framebuffer(&mut self, device: &Arc<Device>, count: u32) -> Result<()> {
-        if count != self.capacity && self.partial.as_ref().is_none_or(|p| p.0 != count) {
-            // The previous partial framebuffer's batch has completed (sense waits): replacing it is safe.
-            let layers = count * self.desc.layers();
-            let fb = self.images.layer_framebuffer(device, &self.pipeline.render_pass, (0, layers), layers)?;
-            self.partial = Some((count, fb));
-        }
-        Ok(())
-    }
-
-    fn framebuffer(&self, count: u32) -> &Framebuffer {
-        match &self.partial {
-            Some((n, fb)) if *n == count && count != self.capacity => &fb.framebuffer,
-            _ => &self.framebuffer,
-        }
+        let capacity = by_layers.min(desc.batch_limit(device)?);
+        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_LAYERED_VERT, 0)?;
+        Ok(Self { pipeline, layouts: views(desc.sensor), desc, capacity })
     }
 }
 
@@ -80,27 +46,34 @@ impl Strategy for Layered {
         self.capacity
     }
 
-    fn maps(&self) -> (&Image, u32) {
-        (&self.images.maps, 0)
+    fn map_layout(&self) -> MapLayout {
+        MapLayout::Layers
     }
 
-    fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
+    fn new_slot(&self) -> Result<SlotMaps> {
+        let (rd, layers) = (self.desc.rd, self.capacity * self.desc.layers());
+        let mut slot = SlotMaps::new(&self.pipeline, (rd, rd, layers), self.capacity as usize * self.layouts.len())?;
+        slot.framebuffers = vec![slot.whole_framebuffer(&self.pipeline)?];
+        Ok(slot)
+    }
+
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
         let layers = self.desc.layers();
-        self.pipeline.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
+        slot.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
         let count = frames.len() as u32;
-        let device = ctx.device;
-        self.prepare_framebuffer(device, count)?;
-        let framebuffer = self.framebuffer(count);
-        let (pipeline, view_count) = (&self.pipeline, self.layouts.len() as u32);
-        let push = SensorPush { epsilon: ctx.epsilon, ..Default::default() };
-        device.submit_and_wait(|cmd| {
-            framebuffer.begin(cmd, &pipeline.render_pass, &MapImages::clears(ctx.background));
-            pipeline.bind(device, cmd, ctx.scene);
-            pipeline.draw(device, cmd, ctx.scene, &push, count * view_count, 0);
-            // SAFETY: recording state, inside the render pass begun above.
-            unsafe { device.raw.cmd_end_render_pass(cmd) };
-            ctx.reduce.record(device, cmd, 0, count);
-            Ok(())
-        })
+        // A smaller batch draws into a framebuffer over its own layers only, so that the others are not
+        // cleared. The previous one's batch has completed (the runner waited for the slot): replacing it is safe.
+        if count != self.capacity && slot.partial.as_ref().is_none_or(|p| p.0 != count) {
+            let partial = slot.layer_framebuffer(&self.pipeline, (0, count * layers), count * layers)?;
+            slot.partial = Some((count, partial));
+        }
+        let framebuffer = match &slot.partial {
+            Some((n, fb)) if *n == count => fb,
+            _ => &slot.framebuffers[0],
+        };
+        let pass = self.pipeline.begin(enc, slot, framebuffer, ck, None);
+        let push = SensorPush { epsilon: ck.epsilon, ..Default::default() };
+        self.pipeline.draw(&pass, &push, count * self.layouts.len() as u32, 0);
+        Ok(())
     }
 }

@@ -1,6 +1,6 @@
-//! Sensor-map pass (paper §III-E, DESIGN.md §3 step 3): renders batches of sensors and hands their maps to
-//! the reduction. How many sensors one submission draws, and how, is a [`Strategy`]; they all produce the
-//! same sensor maps (checked by `crate::strategy` before use) and differ only in speed:
+//! Sensor-map pass (paper §III-E, DESIGN.md §3 step 3): records batches of sensors' maps for the
+//! reduction. How one batch is drawn is a [`Strategy`]; they all produce the same sensor maps (checked by
+//! `crate::strategy` before use) and differ only in speed:
 //!
 //! | strategy     | per batch                                                   | limit per pass            |
 //! |--------------|-------------------------------------------------------------|---------------------------|
@@ -10,16 +10,16 @@
 //! | `layered`    | one instanced draw, `gl_Layer` from the vertex shader       | `maxFramebufferLayers`    |
 //! | `atlas`      | one instanced draw into tiles of one 2D image (ours)        | `maxFramebufferWidth²`    |
 //!
-//! Shaders: `glsl/sensor_<strategy>.vert` (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
+//! A strategy only *records*: the renderer's batch runner owns the batches in flight, each with its own
+//! [`SlotMaps`] (made by [`Strategy::new_slot`]), and submits them. Shaders: `glsl/sensor_<strategy>.vert`
+//! (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
 
 mod atlas;
 mod layered;
 mod multiview;
 mod per_sensor;
 
-use std::fmt;
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{Result, bail, ensure};
 use ash::vk;
@@ -28,16 +28,15 @@ use gpu_allocator::MemoryLocation;
 
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
-use crate::passes::reduce::ReducePass;
 use crate::passes::{DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::sensors::SensorKind;
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::ViewLayout;
 use crate::shaders;
-use crate::vk::image::ImageView;
+use crate::strategy::StrategyKind;
 use crate::vk::{
-    Buffer, DescriptorPool, Device, Framebuffer, GraphicsDesc, Image, ImageDesc, Pipeline, PipelineLayout, RenderPass,
-    SetWriter, barrier,
+    Access, Buffer, DescriptorPool, Device, Encoder, Framebuffer, GraphicsDesc, Image, ImageDesc, ImageView, Pipeline,
+    PipelineLayout, RenderPass, RenderPassScope, SetWriter, barrier,
 };
 
 /// Texel format of the sensor maps: half floats hold `Ck` to 3 significant digits up to 65504, ample for
@@ -46,64 +45,34 @@ pub const MAP_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Bytes per sensor-map texel: colour and depth.
 pub const TEXEL_BYTES: u64 = 8 + 4;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum StrategyKind {
-    PerSensor,
-    SingleCb,
-    Multiview,
-    #[default]
-    Layered,
-    Atlas,
+/// Where a batch's maps lie in their image, for the reduction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapLayout {
+    /// Layer `sensor × layers + layer` of a 2D array.
+    Layers,
+    /// Tile `sensor × layers + layer` of one 2D image, `columns` tiles per row.
+    Atlas { columns: u32 },
 }
 
-impl StrategyKind {
-    pub const ALL: [StrategyKind; 5] = [Self::PerSensor, Self::SingleCb, Self::Multiview, Self::Layered, Self::Atlas];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::PerSensor => "per-sensor",
-            Self::SingleCb => "single-cb",
-            Self::Multiview => "multiview",
-            Self::Layered => "layered",
-            Self::Atlas => "atlas",
-        }
-    }
-
-    pub fn parse(name: &str) -> Result<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name).ok_or_else(|| {
-            let names: Vec<_> = Self::ALL.iter().map(|k| k.name()).collect();
-            anyhow::anyhow!("unknown strategy '{name}': expected auto or one of {}", names.join(", "))
-        })
-    }
-}
-
-impl fmt::Display for StrategyKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// What a strategy needs besides its sensors.
-pub struct SenseContext<'a> {
-    pub device: &'a Arc<Device>,
-    pub scene: &'a GpuScene,
-    /// Bound to this strategy's maps and the radiance map; its pixel list holds the batch's sensors.
-    pub reduce: &'a ReducePass,
+/// What `Ck` is made of besides the scene (paper eq. 1–2): ε for non-emitters, and the background where
+/// a view sees nothing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CkParams {
     pub epsilon: f32,
     pub background: Vec3,
 }
 
-/// One way of rendering a batch of sensor maps.
+/// One way of recording a batch of sensor maps.
 pub trait Strategy {
     fn kind(&self) -> StrategyKind;
     /// Sensors per batch.
     fn capacity(&self) -> u32;
-    /// The image holding the maps, and the atlas columns (0 when the maps are array layers).
-    fn maps(&self) -> (&Image, u32);
-    /// Renders the maps of `frames` (at most [`Strategy::capacity`]) and reduces them into the radiance
-    /// map. Returns the time from submission to completion summed over its submissions.
-    fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration>;
+    fn map_layout(&self) -> MapLayout;
+    /// The resources of one batch in flight: its maps and what draws into them.
+    fn new_slot(&self) -> Result<SlotMaps>;
+    /// Writes the views of `frames` (at most [`Strategy::capacity`]) into `slot` and records their maps.
+    /// The slot's previous batch has completed (the runner waited for it).
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()>;
 }
 
 /// Everything a strategy needs to know to size itself.
@@ -122,30 +91,35 @@ impl StrategyDesc {
         self.sensor.layers()
     }
 
-    /// Sensors the memory budget allows in one batch (at least one).
-    pub fn sensors_in_budget(&self, device: &Device) -> Result<u32> {
+    /// Sensors one batch may hold: what the memory budget allows and one reduction dispatch can cover (at
+    /// least one).
+    pub fn batch_limit(&self, device: &Device) -> Result<u32> {
         let per_sensor = self.layers() as u64 * (self.rd as u64).pow(2) * TEXEL_BYTES;
+        let limits = &device.adapter.limits;
         ensure!(
-            per_sensor <= device.adapter.limits.max_memory_allocation_size
-                && per_sensor <= device.adapter.device_local_bytes,
-            "one sensor of {}² texels needs {} MiB, more than this device can allocate",
-            self.rd,
-            per_sensor >> 20
+            per_sensor <= limits.max_memory_allocation_size && per_sensor <= device.adapter.device_local_bytes,
+            "one sensor's maps ({per_sensor} bytes at rd {}) exceed this device's memory",
+            self.rd
         );
-        Ok(((self.budget / per_sensor) as u32).max(1))
+        let by_budget = (self.budget / per_sensor).max(1);
+        Ok(by_budget.min(limits.max_compute_work_group_count[0] as u64) as u32)
     }
 }
 
-/// Why a strategy cannot run on a device, if it cannot.
+/// Why `kind` cannot run on `device` for sensors described by `desc`, if it cannot.
 pub fn unsupported(kind: StrategyKind, device: &Device, desc: &StrategyDesc) -> Option<String> {
-    let f = device.adapter.features;
-    let l = &device.adapter.limits;
-    if desc.sensor == SensorKind::Hemicube && !f.shader_clip_distance {
-        return Some("no clip distances (hemicube half faces)".into());
+    let (l, f) = (&device.adapter.limits, &device.adapter.features);
+    if desc.sensor.layers() > 1 && !f.shader_clip_distance {
+        return Some("no clip distances (hemicube side faces need them)".into());
     }
     match kind {
-        StrategyKind::PerSensor | StrategyKind::SingleCb | StrategyKind::Layered if !f.shader_output_layer => {
+        StrategyKind::Layered | StrategyKind::PerSensor | StrategyKind::SingleCb if !f.shader_output_layer => {
             Some("no shaderOutputLayer (gl_Layer from the vertex shader)".into())
+        }
+        StrategyKind::Layered | StrategyKind::PerSensor | StrategyKind::SingleCb
+            if l.max_framebuffer_layers < desc.layers() =>
+        {
+            Some(format!("maxFramebufferLayers {} < {} layers per sensor", l.max_framebuffer_layers, desc.layers()))
         }
         StrategyKind::Multiview if !f.multiview => Some("no multiview".into()),
         StrategyKind::Multiview if l.max_multiview_view_count < desc.layers() => {
@@ -177,15 +151,28 @@ pub fn create(
     })
 }
 
-/// The sensor maps and their depth buffer: `layers` layers of `width × height` (array strategies: rd × rd
-/// per sensor layer; the atlas: one large layer).
-struct MapImages {
-    maps: Image,
-    depth: Image,
+/// One batch's sensor maps and what draws into them. The meaning of `framebuffers` is the strategy's own
+/// (one per sensor, per multiview group, or one for the whole batch).
+pub struct SlotMaps {
+    /// The maps the reduction reads: `width × height`, `layers` layers (array strategies: rd × rd per
+    /// sensor layer; the atlas: one large layer).
+    pub maps: Arc<Image>,
+    depth: Arc<Image>,
+    framebuffers: Vec<Framebuffer>,
+    /// Layered: a framebuffer over the first layers, for a smaller batch (unused layers are not cleared).
+    partial: Option<(u32, Framebuffer)>,
+    /// The batch's views, host-written before recording.
+    views: Buffer,
+    // Dropped after the set it holds (never used by the GPU after the slot is dropped: the runner waits).
+    set: vk::DescriptorSet,
+    _pool: DescriptorPool,
 }
 
-impl MapImages {
-    fn new(device: &Arc<Device>, width: u32, height: u32, layers: u32) -> Result<Self> {
+impl SlotMaps {
+    /// Maps and depth of `width × height × layers`, all layers in `GENERAL` (the reduction binds every
+    /// layer, and a smaller batch renders, and so transitions, only the first ones).
+    fn new(pipeline: &SensorPipeline, (width, height, layers): (u32, u32, u32), max_views: usize) -> Result<Self> {
+        let device = &pipeline.device;
         let desc = |format, usage| ImageDesc {
             format,
             width,
@@ -196,32 +183,48 @@ impl MapImages {
         };
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let maps = Image::new(device, "sensor maps", desc(MAP_FORMAT, color))?;
-        let depth =
-            Image::new(device, "sensor depth", desc(DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
-        // The reduction binds every layer, and a smaller batch renders (and transitions) only the first
-        // ones: all layers start out in GENERAL.
-        device.submit_and_wait(|cmd| {
-            barrier::discard_to_general(device, cmd, maps.raw, maps.full_range(), vk::PipelineStageFlags::TOP_OF_PIPE);
+        let maps = Arc::new(Image::new(device, "sensor maps", desc(MAP_FORMAT, color))?);
+        let depth = Arc::new(Image::new(
+            device,
+            "sensor depth",
+            desc(DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+        )?);
+        device.submit_and_wait(|enc| {
+            let (before, after) =
+                ((&[Access::Nothing][..], vk::ImageLayout::UNDEFINED), (&[Access::Any][..], vk::ImageLayout::GENERAL));
+            barrier::image(enc, &maps, maps.full_range(), before, after);
             Ok(())
         })?;
-        Ok(Self { maps, depth })
+        let views = Buffer::new(
+            device,
+            "sensor views",
+            (max_views * size_of::<GpuSensorView>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 2)])?;
+        let set = pool.allocate(&pipeline.layout)?;
+        SetWriter::new(set).storage_buffer(0, &views).storage_buffer(1, &pipeline.surfaces).apply(device);
+        Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, set, _pool: pool })
     }
 
     /// A framebuffer over layers `first..first + count` of the maps and depth. `framebuffer_layers` is
     /// `count` for layered rendering, 1 for multiview (whose view mask addresses the layers).
     fn layer_framebuffer(
         &self,
-        device: &Arc<Device>,
-        render_pass: &RenderPass,
+        pipeline: &SensorPipeline,
         (first, count): (u32, u32),
         framebuffer_layers: u32,
-    ) -> Result<LayerFramebuffer> {
-        let color = self.maps.layer_view(first, count)?;
-        let depth = self.depth.layer_view(first, count)?;
-        let extent = self.maps.extent();
-        let framebuffer = Framebuffer::new(device, render_pass, &[color.raw, depth.raw], extent, framebuffer_layers)?;
-        Ok(LayerFramebuffer { framebuffer, _color: color, _depth: depth })
+    ) -> Result<Framebuffer> {
+        let attachments =
+            vec![ImageView::layers(&self.maps, first, count)?, ImageView::layers(&self.depth, first, count)?];
+        Framebuffer::new(&pipeline.device, &pipeline.render_pass, attachments, framebuffer_layers)
+    }
+
+    /// A layered framebuffer over every layer.
+    fn whole_framebuffer(&self, pipeline: &SensorPipeline) -> Result<Framebuffer> {
+        let layers = self.maps.desc.layers;
+        self.layer_framebuffer(pipeline, (0, layers), layers)
     }
 
     fn clears(background: Vec3) -> [vk::ClearValue; 2] {
@@ -230,90 +233,9 @@ impl MapImages {
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ]
     }
-}
 
-/// A framebuffer over some layers of [`MapImages`], owning the views it was made from.
-struct LayerFramebuffer {
-    // Field order is drop order: the framebuffer before the views it refers to.
-    framebuffer: Framebuffer,
-    _color: ImageView,
-    _depth: ImageView,
-}
-
-/// A sensor pipeline: the render pass, the views buffer, and the pipeline drawing the scene into them.
-struct SensorPipeline {
-    // Field order is drop order.
-    pipeline: Pipeline,
-    _pool: DescriptorPool,
-    set: vk::DescriptorSet,
-    layout: PipelineLayout,
-    render_pass: RenderPass,
-    views: Buffer,
-}
-
-impl SensorPipeline {
-    /// `view_mask` 0 for ordinary passes; `max_views` entries in the views buffer.
-    fn new(device: &Arc<Device>, scene: &GpuScene, vertex: &[u8], view_mask: u32, max_views: usize) -> Result<Self> {
-        let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
-        let views = Buffer::new(
-            device,
-            "sensor views",
-            (max_views * size_of::<GpuSensorView>()) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let stage = vk::ShaderStageFlags::VERTEX;
-        let layout = PipelineLayout::new(
-            device,
-            &[(0, storage, stage), (1, storage, stage)],
-            size_of::<SensorPush>() as u32,
-            stage,
-        )?;
-        let pool = DescriptorPool::new(device, 1, &[(storage, 2)])?;
-        let set = pool.allocate(&layout)?;
-        SetWriter::new(set).storage_buffer(0, &views).storage_buffer(1, &scene.surfaces).apply(device);
-        let pipeline = Pipeline::graphics(
-            device,
-            &layout,
-            &GraphicsDesc {
-                vertex,
-                fragment: shaders::SENSOR_FRAG,
-                render_pass: render_pass.raw,
-                color_attachments: 1,
-                vertex_stride: VERTEX_STRIDE,
-                vertex_attributes: &VERTEX_ATTRIBUTES,
-                depth_compare: Some(DEPTH_COMPARE),
-            },
-        )?;
-        Ok(Self { pipeline, _pool: pool, set, layout, render_pass, views })
-    }
-
-    /// Binds pipeline, descriptors and the scene's vertices.
-    fn bind(&self, device: &Device, cmd: vk::CommandBuffer, scene: &GpuScene) {
-        self.pipeline.bind(device, cmd, vk::PipelineBindPoint::GRAPHICS, &self.layout, self.set);
-        scene.bind_vertices(device, cmd);
-    }
-
-    /// Draws the scene `instances` times starting at view `first_instance`.
-    fn draw(
-        &self,
-        device: &Device,
-        cmd: vk::CommandBuffer,
-        scene: &GpuScene,
-        push: &SensorPush,
-        instances: u32,
-        first_instance: u32,
-    ) {
-        self.layout.push(cmd, push);
-        // SAFETY: recording state inside a render pass of this pipeline's render pass.
-        unsafe { device.raw.cmd_draw(cmd, scene.vertex_count, instances, 0, first_instance) };
-    }
-}
-
-impl SensorPipeline {
-    /// Writes the views of `frames`, sensor-major, in [`crate::sensors::layout::views`] order; `slot(i, view)`
-    /// gives each view's `layer` field (the layer or tile it draws into).
+    /// Writes the views of `frames`, sensor-major, in [`crate::sensors::layout::views`] order; `slot(i,
+    /// view)` gives each view's `layer` field (the layer or tile it draws into).
     fn write_views(
         &mut self,
         frames: &[SensorFrame],
@@ -336,5 +258,77 @@ impl SensorPipeline {
             })
             .collect();
         self.views.write(0, &views)
+    }
+}
+
+/// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
+struct SensorPipeline {
+    // Field order is drop order.
+    pipeline: Pipeline,
+    layout: PipelineLayout,
+    render_pass: RenderPass,
+    /// The scene's vertices and materials (the slots' descriptor sets name the latter).
+    vertices: Arc<Buffer>,
+    vertex_count: u32,
+    surfaces: Arc<Buffer>,
+    device: Arc<Device>,
+}
+
+impl SensorPipeline {
+    /// `view_mask` 0 for ordinary passes.
+    fn new(device: &Arc<Device>, scene: &GpuScene, vertex: &[u8], view_mask: u32) -> Result<Self> {
+        let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let stage = vk::ShaderStageFlags::VERTEX;
+        let layout = PipelineLayout::new(
+            device,
+            &[(0, storage, stage), (1, storage, stage)],
+            size_of::<SensorPush>() as u32,
+            stage,
+        )?;
+        let pipeline = Pipeline::graphics(
+            device,
+            &layout,
+            &GraphicsDesc {
+                vertex,
+                fragment: shaders::SENSOR_FRAG,
+                render_pass: render_pass.raw,
+                color_attachments: 1,
+                vertex_stride: VERTEX_STRIDE,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                depth_compare: Some(DEPTH_COMPARE),
+            },
+        )?;
+        Ok(Self {
+            pipeline,
+            layout,
+            render_pass,
+            vertices: scene.vertices.clone(),
+            vertex_count: scene.vertex_count,
+            surfaces: scene.surfaces.clone(),
+            device: device.clone(),
+        })
+    }
+
+    /// Begins the render pass on `framebuffer` (over `area`, or all of it) and binds the pipeline, the
+    /// slot's views and the scene.
+    fn begin<'e, 'a>(
+        &self,
+        enc: &'e Encoder<'a>,
+        slot: &SlotMaps,
+        framebuffer: &Framebuffer,
+        ck: CkParams,
+        area: Option<vk::Extent2D>,
+    ) -> RenderPassScope<'e, 'a> {
+        let pass = enc.begin_render_pass(&self.render_pass, framebuffer, &SlotMaps::clears(ck.background), area);
+        pass.bind(&self.pipeline, &self.layout, slot.set);
+        pass.bind_vertices(&self.vertices);
+        pass
+    }
+
+    /// Draws the scene `instances` times starting at view `first_instance`.
+    fn draw(&self, pass: &RenderPassScope<'_, '_>, push: &SensorPush, instances: u32, first_instance: u32) {
+        pass.push(&self.layout, push);
+        pass.draw(self.vertex_count, instances, 0, first_instance);
     }
 }

@@ -14,29 +14,27 @@
 //! ```
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{Result, ensure};
 
-use super::{LayerFramebuffer, MapImages, SenseContext, SensorPipeline, Strategy, StrategyDesc, StrategyKind};
+use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush};
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::layout::{ViewLayout, views};
 use crate::shaders;
-use crate::vk::{Device, Image};
+use crate::strategy::StrategyKind;
+use crate::vk::{Device, Encoder};
 
 pub struct Multiview {
-    // Field order is drop order: framebuffers before the views and images they use.
-    framebuffers: Vec<LayerFramebuffer>,
     pipeline: SensorPipeline,
-    images: MapImages,
     /// For each layer of a sensor, the views that draw into it, in draw order.
     per_layer: Vec<Vec<ViewLayout>>,
     desc: StrategyDesc,
-    /// Layers per group (bits in the view mask) and sensors per group.
+    /// Layers per group (bits in the view mask), sensors per group, and groups per batch.
     group_layers: u32,
     group_sensors: u32,
+    groups: u32,
 }
 
 impl Multiview {
@@ -48,21 +46,14 @@ impl Multiview {
         ensure!(group_sensors >= 1, "maxMultiviewViewCount {} < {layers}", limits.max_multiview_view_count);
         let group_layers = group_sensors * layers;
         let groups = (limits.max_image_array_layers / group_layers)
-            .min(desc.sensors_in_budget(device)?.div_ceil(group_sensors))
+            .min(desc.batch_limit(device)?.div_ceil(group_sensors))
             .max(1);
         let layouts = views(desc.sensor);
         let per_layer: Vec<Vec<ViewLayout>> =
             (0..layers).map(|l| layouts.iter().copied().filter(|v| v.layer == l).collect()).collect();
-        let draws = per_layer.iter().map(Vec::len).max().unwrap_or(1);
         let view_mask = if group_layers == 32 { u32::MAX } else { (1 << group_layers) - 1 };
-        let max_views = (groups * group_layers) as usize * draws;
-        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_MULTIVIEW_VERT, view_mask, max_views)?;
-        let images = MapImages::new(device, desc.rd, desc.rd, groups * group_layers)?;
-        // Multiview framebuffers have one layer; the view mask addresses the attachments' layers.
-        let framebuffers = (0..groups)
-            .map(|g| images.layer_framebuffer(device, &pipeline.render_pass, (g * group_layers, group_layers), 1))
-            .collect::<Result<Vec<_>>>()?;
-        Ok(Self { framebuffers, pipeline, images, per_layer, desc, group_layers, group_sensors })
+        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_MULTIVIEW_VERT, view_mask)?;
+        Ok(Self { pipeline, per_layer, desc, group_layers, group_sensors, groups })
     }
 
     fn draws(&self) -> u32 {
@@ -99,34 +90,34 @@ impl Strategy for Multiview {
     }
 
     fn capacity(&self) -> u32 {
-        self.framebuffers.len() as u32 * self.group_sensors
+        self.groups * self.group_sensors
     }
 
-    fn maps(&self) -> (&Image, u32) {
-        (&self.images.maps, 0)
+    fn map_layout(&self) -> MapLayout {
+        MapLayout::Layers
     }
 
-    fn sense(&mut self, ctx: &SenseContext<'_>, frames: &[SensorFrame]) -> Result<Duration> {
-        self.pipeline.views.write(0, &self.views(frames))?;
-        let (device, pipeline) = (ctx.device, &self.pipeline);
-        let count = frames.len() as u32;
-        let groups = count.div_ceil(self.group_sensors);
+    fn new_slot(&self) -> Result<SlotMaps> {
+        let (rd, k) = (self.desc.rd, self.group_layers);
+        let max_views = (self.groups * k * self.draws()) as usize;
+        let mut slot = SlotMaps::new(&self.pipeline, (rd, rd, self.groups * k), max_views)?;
+        // Multiview framebuffers have one layer; the view mask addresses the attachments' layers.
+        slot.framebuffers =
+            (0..self.groups).map(|g| slot.layer_framebuffer(&self.pipeline, (g * k, k), 1)).collect::<Result<_>>()?;
+        Ok(slot)
+    }
+
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
+        slot.views.write(0, &self.views(frames))?;
+        let groups = (frames.len() as u32).div_ceil(self.group_sensors);
         let (draws, k) = (self.draws(), self.group_layers);
-        let clears = MapImages::clears(ctx.background);
-        device.submit_and_wait(|cmd| {
-            for g in 0..groups {
-                self.framebuffers[g as usize].framebuffer.begin(cmd, &pipeline.render_pass, &clears);
-                pipeline.bind(device, cmd, ctx.scene);
-                for d in 0..draws {
-                    let push =
-                        SensorPush { epsilon: ctx.epsilon, first_view: (g * draws + d) * k, ..Default::default() };
-                    pipeline.draw(device, cmd, ctx.scene, &push, 1, 0);
-                }
-                // SAFETY: recording state, inside the render pass begun above.
-                unsafe { device.raw.cmd_end_render_pass(cmd) };
+        for g in 0..groups {
+            let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[g as usize], ck, None);
+            for d in 0..draws {
+                let push = SensorPush { epsilon: ck.epsilon, first_view: (g * draws + d) * k, ..Default::default() };
+                self.pipeline.draw(&pass, &push, 1, 0);
             }
-            ctx.reduce.record(device, cmd, 0, count);
-            Ok(())
-        })
+        }
+        Ok(())
     }
 }

@@ -1,0 +1,239 @@
+//! The batch runner: senses lists of pixels in batches, several in flight. Each of its slots owns one
+//! batch's resources — sensor maps, views, pixel list, results, reduction descriptor set, command buffer,
+//! fence and timestamps — so that while the device renders one batch the host builds and records the next.
+//!
+//! ```text
+//!   host:    [views+record b0][views+record b1] wait b0 → R(b0) [views+record b2] wait b1 → R(b1) …
+//!   device:                  [maps b0 | reduce b0][maps b1 | reduce b1][maps b2 | reduce b2] …
+//! ```
+//!
+//! A batch is recorded as sensor maps (the strategy) → barrier → reduction, which writes each sensor's R
+//! into the radiance map and into the slot's results, which the host reads when the slot is next waited
+//! on: a round of refinement reads back exactly the values it sensed, nothing more.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, ensure};
+use ash::vk;
+use glam::Vec4;
+use gpu_allocator::MemoryLocation;
+use serde::Serialize;
+
+use crate::gbuffer::GBufferData;
+use crate::gpu_scene::GpuScene;
+use crate::passes::reduce::{ReduceBindings, ReducePass};
+use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
+use crate::sensors::frame::SensorFrame;
+use crate::strategy::StrategyKind;
+use crate::vk::{Access, Buffer, CommandSlot, Device, TimestampQueries, barrier};
+
+/// Timestamps per batch: start, sensor maps done, reduction done.
+const TIMESTAMPS: u32 = 3;
+
+/// What the batches of a render cost, split between host and device.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BatchTimes {
+    pub batches: u64,
+    /// Host: building views, recording and submitting.
+    pub host_record: Duration,
+    /// Host: waiting for batches to complete.
+    pub host_wait: Duration,
+    /// Device, by timestamp queries: the sensor maps and the reduction. `None` where the device cannot
+    /// write timestamps.
+    pub gpu_maps: Option<Duration>,
+    pub gpu_reduction: Option<Duration>,
+    /// Bytes read back to the host (each batch's results).
+    pub readback_bytes: u64,
+}
+
+struct Slot {
+    commands: CommandSlot,
+    maps: SlotMaps,
+    /// Radiance-map pixel of each sensor of the batch, host-written.
+    pixels: Buffer,
+    /// R of each sensor of the batch, device-written, host-read.
+    results: Buffer,
+    timestamps: Option<TimestampQueries>,
+    /// Pixels of the batch in flight; empty when the slot is idle.
+    in_flight: Vec<u32>,
+}
+
+pub(crate) struct BatchRunner {
+    // Field order is drop order: the slots wait for their work before anything they use goes.
+    slots: Vec<Slot>,
+    next: usize,
+    strategy: Box<dyn Strategy>,
+    reduce: ReducePass,
+    /// How far a sensor sits above its surface (world units).
+    bias: f32,
+    device: Arc<Device>,
+    pub times: BatchTimes,
+}
+
+impl BatchRunner {
+    /// A runner for `kind` with `in_flight` slots, each holding one batch as `desc` sizes it.
+    pub fn new(
+        device: &Arc<Device>,
+        scene: &GpuScene,
+        kind: StrategyKind,
+        desc: StrategyDesc,
+        in_flight: u32,
+        bias: f32,
+    ) -> Result<Self> {
+        ensure!(in_flight >= 1, "at least one batch must be in flight");
+        let strategy = sensor_maps::create(kind, device, scene, desc)?;
+        let capacity = strategy.capacity() as u64;
+        let reduce = ReducePass::new(device, desc.sensor, desc.rd, in_flight)?;
+        let slots = (0..in_flight)
+            .map(|_| -> Result<Slot> {
+                Ok(Slot {
+                    commands: CommandSlot::new(device)?,
+                    maps: strategy.new_slot()?,
+                    pixels: Buffer::new(
+                        device,
+                        "sensor pixels",
+                        4 * capacity,
+                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                        MemoryLocation::CpuToGpu,
+                    )?,
+                    results: Buffer::new(
+                        device,
+                        "sensor results",
+                        16 * capacity,
+                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                        MemoryLocation::GpuToCpu,
+                    )?,
+                    timestamps: TimestampQueries::new(device, TIMESTAMPS)?,
+                    in_flight: Vec::new(),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self { slots, next: 0, strategy, reduce, bias, device: device.clone(), times: BatchTimes::default() })
+    }
+
+    pub fn kind(&self) -> StrategyKind {
+        self.strategy.kind()
+    }
+
+    /// Sensors per batch.
+    pub fn capacity(&self) -> u32 {
+        self.strategy.capacity()
+    }
+
+    pub fn in_flight(&self) -> u32 {
+        self.slots.len() as u32
+    }
+
+    /// Makes the reductions write into `radiance` (a render's radiance map) and resets the times. No batch
+    /// may be in flight: [`BatchRunner::drain`] first.
+    pub fn bind(&mut self, radiance: &Buffer) -> Result<()> {
+        ensure!(self.slots.iter().all(|s| s.in_flight.is_empty()), "bind with batches in flight");
+        for (i, slot) in self.slots.iter().enumerate() {
+            let bindings =
+                ReduceBindings { maps: &slot.maps.maps, pixels: &slot.pixels, results: &slot.results, radiance };
+            self.reduce.bind(&self.device, i, &bindings);
+        }
+        self.times = BatchTimes::default();
+        Ok(())
+    }
+
+    /// Senses a sensor at each of `pixels` (indices into `g`) in batches, handing each completed batch's
+    /// pixels and R to `deliver`. Returns with up to all slots' batches still in flight.
+    pub fn sense(
+        &mut self,
+        g: &GBufferData,
+        pixels: &[u32],
+        ck: CkParams,
+        deliver: &mut dyn FnMut(&[u32], &[Vec4]),
+    ) -> Result<()> {
+        for chunk in pixels.chunks(self.capacity() as usize) {
+            let index = self.next;
+            self.next = (self.next + 1) % self.slots.len();
+            self.retire(index, deliver)?;
+
+            let start = Instant::now();
+            let frames: Vec<SensorFrame> = chunk
+                .iter()
+                .map(|&i| {
+                    SensorFrame::new(g.position[i as usize].truncate(), g.normal[i as usize].truncate(), self.bias)
+                })
+                .collect();
+            let (strategy, reduce) = (&self.strategy, &self.reduce);
+            let slot = &mut self.slots[index];
+            slot.pixels.write(0, chunk)?;
+            let (maps, timestamps) = (&mut slot.maps, &slot.timestamps);
+            slot.commands.record(|enc| {
+                let stamp = |query, stage| timestamps.iter().for_each(|t| enc.timestamp(t, query, stage));
+                timestamps.iter().for_each(|t| enc.reset_queries(t));
+                stamp(0, vk::PipelineStageFlags::TOP_OF_PIPE);
+                strategy.record(enc, maps, &frames, ck)?;
+                stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                barrier::global(enc, &[Access::ColorAttachmentWrite], &[Access::ComputeRead]);
+                reduce.record(enc, index, strategy.map_layout(), chunk.len() as u32);
+                stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                // The results (and the radiance map) are read by the host, or copied, once the fence signals.
+                barrier::global(enc, &[Access::ComputeWrite], &[Access::HostRead, Access::TransferRead]);
+                Ok(())
+            })?;
+            slot.commands.submit()?;
+            slot.in_flight = chunk.to_vec();
+            self.times.batches += 1;
+            self.times.host_record += start.elapsed();
+        }
+        Ok(())
+    }
+
+    /// Waits for every batch in flight, handing its results to `deliver`.
+    pub fn drain(&mut self, deliver: &mut dyn FnMut(&[u32], &[Vec4])) -> Result<()> {
+        // Oldest first: the slot after the last one used.
+        for k in 0..self.slots.len() {
+            self.retire((self.next + k) % self.slots.len(), deliver)?;
+        }
+        Ok(())
+    }
+
+    /// Waits for slot `index`'s batch, if any, and delivers its results and times.
+    fn retire(&mut self, index: usize, deliver: &mut dyn FnMut(&[u32], &[Vec4])) -> Result<()> {
+        let slot = &mut self.slots[index];
+        self.times.host_wait += slot.commands.wait()?;
+        if slot.in_flight.is_empty() {
+            return Ok(());
+        }
+        let pixels = std::mem::take(&mut slot.in_flight);
+        let r: Vec<Vec4> = slot.results.read(pixels.len())?;
+        self.times.readback_bytes += size_of_val(r.as_slice()) as u64;
+        if let Some(t) = slot.timestamps.as_ref().map(TimestampQueries::read_seconds).transpose()?.flatten() {
+            let add = |total: &mut Option<Duration>, seconds: f64| {
+                *total = Some(total.unwrap_or_default() + Duration::from_secs_f64(seconds.max(0.0)));
+            };
+            add(&mut self.times.gpu_maps, t[1] - t[0]);
+            add(&mut self.times.gpu_reduction, t[2] - t[1]);
+        }
+        deliver(&pixels, &r);
+        Ok(())
+    }
+
+    /// Runs the reduction alone over slot 0's first `count` sensors again (their maps are still in place
+    /// after a sense), into a scratch radiance map; returns the time from submission to completion.
+    pub fn time_reduction(&mut self, count: u32) -> Result<Duration> {
+        self.drain(&mut |_, _| ())?;
+        let count = count.min(self.capacity());
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let scratch = Buffer::new(&self.device, "scratch radiance", 16 * count as u64, usage, MemoryLocation::GpuOnly)?;
+        let slot = &self.slots[0];
+        // The pixel list still names the last batch's pixels: point them into the scratch map instead.
+        let pixels: Vec<u32> = (0..count).collect();
+        let mut list = Buffer::new(&self.device, "scratch pixels", 4 * count as u64, usage, MemoryLocation::CpuToGpu)?;
+        list.write(0, &pixels)?;
+        let bindings =
+            ReduceBindings { maps: &slot.maps.maps, pixels: &list, results: &slot.results, radiance: &scratch };
+        self.reduce.bind(&self.device, 0, &bindings);
+        let layout = self.strategy.map_layout();
+        let time = self.device.submit_and_wait(|enc| {
+            self.reduce.record(enc, 0, layout, count);
+            Ok(())
+        })?;
+        Ok(time)
+    }
+}

@@ -1,0 +1,380 @@
+//! One render, end to end (DESIGN.md §3): G-buffer → sensors on the grid → rounds of refinement, each
+//! sensing its pixels in batches on the GPU (sensor maps + reduction, several batches in flight) →
+//! interpolation → id-constrained filter → composition. The CPU decides where sensors go from the values
+//! each round sensed; every image operation runs on the GPU.
+//!
+//! A [`Renderer`] is built for one scene and one kind and size of sensor ([`RendererBuilder`], which also
+//! chooses the batching strategy); each [`Renderer::render`] then takes an image size and the per-render
+//! [`FrameParams`].
+
+mod batch;
+mod probe;
+mod stats;
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use ash::vk;
+use glam::Vec4;
+use gpu_allocator::MemoryLocation;
+
+use batch::BatchRunner;
+pub use batch::BatchTimes;
+pub use probe::probe_pixels;
+pub use stats::{RenderStats, RenderTimes};
+
+use crate::gbuffer::GBufferData;
+use crate::gpu_scene::GpuScene;
+use crate::params::{FrameParams, Param, ParamError};
+use crate::passes::compose::ComposePass;
+use crate::passes::filter::FilterPass;
+use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
+use crate::passes::interpolate::InterpolatePass;
+use crate::passes::sensor_maps::{CkParams, StrategyDesc, TEXEL_BYTES};
+use crate::scene::{Camera, ImageSize, Scene};
+use crate::sensors::SensorKind;
+use crate::sensors::frame;
+use crate::sensors::refine::Refinement;
+use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
+use crate::vk::{Access, Buffer, Device, barrier, transfer};
+
+/// Progress callbacks for long renders.
+pub trait Progress {
+    /// `n` more sensors will be rendered.
+    fn queued(&self, _n: u64) {}
+    /// `n` more sensors are done.
+    fn done(&self, _n: u64) {}
+}
+
+/// No progress reporting.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// Batches in flight by default: one rendering while the host prepares the next.
+pub const DEFAULT_IN_FLIGHT: u32 = 2;
+
+/// What a renderer is built for. These fix its pipelines and sensor maps; everything else is chosen per
+/// render ([`FrameParams`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RendererConfig {
+    pub sensor: SensorKind,
+    /// rd: sensor map side in texels (see `params::RenderParams::sensor_size`).
+    pub sensor_size: u32,
+    /// Bytes for one batch's sensor maps and depth; `None`: [`default_memory_budget`].
+    pub memory_budget: Option<u64>,
+    /// Batches in flight, ≥ 1 (each has its own maps: memory grows with it).
+    pub in_flight: u32,
+    pub strategy: StrategyRequest,
+}
+
+/// Budget for one batch's sensor maps when none is given: together, the batches in flight use an eighth
+/// of the device's largest local heap.
+pub fn default_memory_budget(device: &Device, in_flight: u32) -> u64 {
+    device.adapter.device_local_bytes / 8 / in_flight.max(1) as u64
+}
+
+/// Builds a [`Renderer`]: checks the settings against the device and chooses the batching strategy (its
+/// self-check and, for `auto`, its measurement, cached in `cache`).
+pub struct RendererBuilder<'a> {
+    device: &'a Arc<Device>,
+    scene: &'a Scene,
+    config: RendererConfig,
+    cache: Option<&'a mut Cache>,
+    events: Option<&'a mut dyn FnMut(strategy::Event)>,
+}
+
+impl<'a> RendererBuilder<'a> {
+    pub fn memory_budget(mut self, bytes: Option<u64>) -> Self {
+        self.config.memory_budget = bytes;
+        self
+    }
+
+    pub fn in_flight(mut self, batches: u32) -> Self {
+        self.config.in_flight = batches;
+        self
+    }
+
+    pub fn strategy(mut self, request: StrategyRequest) -> Self {
+        self.config.strategy = request;
+        self
+    }
+
+    /// Where self-checks and choices are remembered (default: nowhere, everything is measured afresh).
+    pub fn cache(mut self, cache: &'a mut Cache) -> Self {
+        self.cache = Some(cache);
+        self
+    }
+
+    /// Receives what the strategy choice checked and measured.
+    pub fn on_strategy_event(mut self, events: &'a mut dyn FnMut(strategy::Event)) -> Self {
+        self.events = Some(events);
+        self
+    }
+
+    /// Chooses the strategy and builds the renderer. Errors about a setting are [`ParamError`]s.
+    pub fn build(self) -> Result<Renderer> {
+        let Self { device, scene, config, cache, events } = self;
+        check_size(device, &config)?;
+        let budget = config.memory_budget.unwrap_or_else(|| default_memory_budget(device, config.in_flight));
+        let mut own_cache = Cache::in_memory();
+        let cache = cache.unwrap_or(&mut own_cache);
+        let mut ignore = |_| ();
+        let events = events.unwrap_or(&mut ignore);
+        let choice = {
+            let mut prober = probe::ProbeRenderer::new(device, config.sensor, budget, config.in_flight);
+            strategy::choose(&mut prober, config.sensor, config.sensor_size, budget, config.strategy, cache, events)?
+        };
+        Renderer::new(device, scene, config, choice)
+    }
+
+    /// Builds the renderer with `kind`, without its self-check: for the self-check itself, and for tests
+    /// and benchmarks that compare strategies.
+    pub fn build_unchecked(self, kind: StrategyKind) -> Result<Renderer> {
+        check_size(self.device, &self.config)?;
+        let choice = Choice { strategy: kind, reason: "unchecked".into() };
+        Renderer::new(self.device, self.scene, self.config, choice)
+    }
+}
+
+/// Self-checks `kind` against `per-sensor` on the probe (see [`crate::strategy`]), on `device`.
+pub fn self_check(device: &Arc<Device>, sensor: SensorKind, kind: StrategyKind) -> Result<strategy::CheckResult> {
+    let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
+    strategy::self_check(&mut probe::ProbeRenderer::new(device, sensor, budget, DEFAULT_IN_FLIGHT), kind)
+}
+
+/// The sensor size against the device's largest image and framebuffer side.
+fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
+    let limits = &device.adapter.limits;
+    let max = limits.max_image_dimension_2d.min(limits.max_framebuffer_width).min(limits.max_framebuffer_height);
+    match config.sensor.size_problem(config.sensor_size, max) {
+        Some(problem) => Err(ParamError::new(Param::SensorSize, problem).into()),
+        None => Ok(()),
+    }
+}
+
+/// The GPU state for rendering one scene with one kind and size of sensor, reusable across renders.
+pub struct Renderer {
+    // Field order is drop order: the runner waits for its batches first.
+    runner: BatchRunner,
+    interpolate: InterpolatePass,
+    filter: FilterPass,
+    compose: ComposePass,
+    gbuffer: GBufferPass,
+    scene: GpuScene,
+    camera: Camera,
+    /// The scene's diagonal: sensor offsets and near planes are fractions of it.
+    scale: f32,
+    config: RendererConfig,
+    choice: Choice,
+    device: Arc<Device>,
+}
+
+/// What a render produced.
+pub struct RenderOutput {
+    pub size: ImageSize,
+    /// `Le + albedo·R`.
+    pub image: Vec<Vec4>,
+    /// R after interpolation and filtering; w says how it was obtained (see `gpu_types::radiance_state`).
+    pub radiance: Vec<Vec4>,
+    pub gbuffer: GBufferData,
+    pub stats: RenderStats,
+}
+
+/// What one render writes on the GPU; dropped when the render returns (all its work waited for).
+struct Targets {
+    gbuffer: GBuffer,
+    radiance: Buffer,
+    filtered: Buffer,
+    image: Buffer,
+}
+
+impl Renderer {
+    /// A builder for `scene` with sensors of `sensor` kind and size `sensor_size`, `auto` strategy, the
+    /// default budget and batches in flight.
+    pub fn builder<'a>(
+        device: &'a Arc<Device>,
+        scene: &'a Scene,
+        sensor: SensorKind,
+        sensor_size: u32,
+    ) -> RendererBuilder<'a> {
+        let config = RendererConfig {
+            sensor,
+            sensor_size,
+            memory_budget: None,
+            in_flight: DEFAULT_IN_FLIGHT,
+            strategy: StrategyRequest::Auto,
+        };
+        RendererBuilder { device, scene, config, cache: None, events: None }
+    }
+
+    fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
+        let scale = scene.mesh.scale();
+        let gpu_scene = GpuScene::upload(device, scene)?;
+        let budget = config.memory_budget.unwrap_or_else(|| default_memory_budget(device, config.in_flight));
+        let desc = StrategyDesc { sensor: config.sensor, rd: config.sensor_size, budget, near: frame::NEAR * scale };
+        let bias = frame::BIAS * scale;
+        Ok(Self {
+            runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, bias)?,
+            interpolate: InterpolatePass::new(device)?,
+            filter: FilterPass::new(device)?,
+            compose: ComposePass::new(device)?,
+            gbuffer: GBufferPass::new(device, &gpu_scene)?,
+            scene: gpu_scene,
+            camera: scene.camera,
+            scale,
+            config,
+            choice,
+            device: device.clone(),
+        })
+    }
+
+    pub fn strategy(&self) -> StrategyKind {
+        self.runner.kind()
+    }
+
+    /// How the strategy was chosen.
+    pub fn choice(&self) -> &Choice {
+        &self.choice
+    }
+
+    pub fn config(&self) -> &RendererConfig {
+        &self.config
+    }
+
+    /// Sensors per batch.
+    pub fn batch_size(&self) -> u32 {
+        self.runner.capacity()
+    }
+
+    /// The G-buffer at `size`, on the GPU and on the host.
+    fn render_gbuffer(&self, size: ImageSize) -> Result<(GBuffer, GBufferData)> {
+        let near = gbuffer::NEAR * self.scale;
+        let gpu = self.gbuffer.render(&self.device, &self.scene, &self.camera, size, near)?;
+        let host = gpu.read_back(&self.device)?;
+        Ok((gpu, host))
+    }
+
+    /// The G-buffer of the scene at `size` (e.g. to choose where to place probe sensors).
+    pub fn gbuffer(&self, size: ImageSize) -> Result<GBufferData> {
+        Ok(self.render_gbuffer(size)?.1)
+    }
+
+    /// R sensed at `pixels` (surface pixels of the image at `size`), and the host time sensing took
+    /// (views, recording, submissions, waits): for the strategy self-check and benchmarks.
+    pub fn sense_at(&mut self, size: ImageSize, pixels: &[u32], frame: &FrameParams) -> Result<(Vec<Vec4>, Duration)> {
+        let (_, g) = self.render_gbuffer(size)?;
+        let radiance = map_buffer(&self.device, "radiance map", size)?;
+        self.runner.bind(&radiance)?;
+        let mut r = vec![Vec4::ZERO; g.surface.len()];
+        let mut deliver = |p: &[u32], values: &[Vec4]| p.iter().zip(values).for_each(|(&i, &v)| r[i as usize] = v);
+        let start = Instant::now();
+        let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
+        self.runner.sense(&g, pixels, ck, &mut deliver)?;
+        self.runner.drain(&mut deliver)?;
+        Ok((pixels.iter().map(|&i| r[i as usize]).collect(), start.elapsed()))
+    }
+
+    /// Runs the reduction alone over the last batch's first `count` sensors again (their maps are still in
+    /// place after [`Renderer::sense_at`]); returns the time from submission to completion.
+    pub fn time_reduction(&mut self, count: u32) -> Result<Duration> {
+        self.runner.time_reduction(count)
+    }
+
+    /// Renders the scene at `size`.
+    pub fn render(&mut self, size: ImageSize, frame: &FrameParams, progress: &dyn Progress) -> Result<RenderOutput> {
+        let start = Instant::now();
+        let device = self.device.clone();
+        let pixels = size.width as usize * size.height as usize;
+
+        let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
+        let targets = Targets {
+            gbuffer: gpu_gbuffer,
+            radiance: map_buffer(&device, "radiance map", size)?,
+            filtered: map_buffer(&device, "filtered radiance map", size)?,
+            image: map_buffer(&device, "final image", size)?,
+        };
+        device.submit_and_wait(|enc| {
+            enc.fill(&targets.radiance, 0);
+            Ok(())
+        })?;
+        self.runner.bind(&targets.radiance)?;
+        let gbuffer_time = start.elapsed();
+
+        // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G). The
+        // host keeps R only where it sensed: that is all the refinement reads.
+        let sensing_start = Instant::now();
+        let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
+        let (mut refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
+        let mut r = vec![Vec4::ZERO; pixels];
+        let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
+        let mut refine_time = Duration::ZERO;
+        loop {
+            if !pending.is_empty() {
+                progress.queued(pending.len() as u64);
+                let read_before = self.runner.times.readback_bytes;
+                let mut deliver = |p: &[u32], values: &[Vec4]| {
+                    p.iter().zip(values).for_each(|(&i, &v)| r[i as usize] = v);
+                    progress.done(p.len() as u64);
+                };
+                self.runner.sense(&g, &pending, ck, &mut deliver)?;
+                self.runner.drain(&mut deliver)?;
+                per_round.push(pending.len() as u64);
+                readback_per_round.push(self.runner.times.readback_bytes - read_before);
+            }
+            if refinement.is_finished() {
+                break;
+            }
+            let t = Instant::now();
+            pending = refinement.step(&r);
+            refine_time += t.elapsed();
+        }
+        let sensing_time = sensing_start.elapsed();
+
+        // Interpolation, filter, composition: one submission.
+        let post_start = Instant::now();
+        self.interpolate.bind(&device, refinement.interpolated(), &targets.radiance)?;
+        self.filter.bind(&device, &targets.radiance, &targets.filtered, &targets.gbuffer.surface);
+        self.compose.bind(&device, &targets.filtered, &targets.image, &targets.gbuffer);
+        device.submit_and_wait(|enc| {
+            barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
+            self.interpolate.record(enc, size);
+            barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+            self.filter.record(enc, size, frame.filter_radius);
+            barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+            self.compose.record(enc, size);
+            Ok(())
+        })?;
+        let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
+        let radiance = transfer::read_buffer::<Vec4>(&device, &targets.filtered, pixels)?;
+        let post_time = post_start.elapsed();
+
+        let batches = self.runner.times;
+        let stats = RenderStats::new(
+            &self.device,
+            self,
+            size,
+            frame,
+            stats::Counts {
+                sensors_per_round: per_round,
+                readback_bytes_per_round: readback_per_round,
+                interpolated_quads: refinement.interpolated().len() as u64,
+            },
+            start.elapsed(),
+            RenderTimes::new(gbuffer_time, sensing_time, post_time, refine_time, &batches),
+        );
+        Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
+    }
+}
+
+/// Bytes of one sensor's maps and depth at `rd`: what a memory budget is divided by.
+pub fn sensor_bytes(sensor: SensorKind, rd: u32) -> u64 {
+    sensor.layers() as u64 * (rd as u64).pow(2) * TEXEL_BYTES
+}
+
+/// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.
+fn map_buffer(device: &Arc<Device>, name: &str, size: ImageSize) -> Result<Buffer> {
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(device, name, size.width as u64 * size.height as u64 * 16, usage, MemoryLocation::GpuOnly)
+}

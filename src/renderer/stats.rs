@@ -1,0 +1,129 @@
+//! What a render measured, as printed and as written by `--stats-json`: counts, and times split honestly
+//! between what the host waited for and what the device did.
+
+use std::time::Duration;
+
+use serde::Serialize;
+
+use super::{BatchTimes, Renderer};
+use crate::params::FrameParams;
+use crate::scene::ImageSize;
+use crate::strategy::StrategyKind;
+use crate::vk::Device;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderStats {
+    pub device: String,
+    pub driver: String,
+    pub sensor: String,
+    pub strategy: StrategyKind,
+    pub sensor_size: u32,
+    pub width: u32,
+    pub height: u32,
+    pub tile: u32,
+    pub dradiance: f32,
+    pub epsilon: f32,
+    pub filter_radius: u32,
+    /// Sensors rendered, in total and per refinement round.
+    pub sensors: u64,
+    pub sensors_per_round: Vec<u64>,
+    /// Bytes read back to the host after each round: the R of the sensors it placed.
+    pub readback_bytes_per_round: Vec<u64>,
+    pub interpolated_quads: u64,
+    pub batch_size: u32,
+    pub batches: u64,
+    pub in_flight: u32,
+    /// Wall time of the whole render.
+    pub total_seconds: f64,
+    pub times: RenderTimes,
+    /// The paper's metric: total time / sensors, in milliseconds.
+    pub sensor_time_ms: f64,
+}
+
+/// Where a render's time went. The phases are wall time on the host and add up to nearly the total; within
+/// sensing, the host's own work and its waits are measured on the host, the device's by timestamps.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct RenderTimes {
+    /// The G-buffer pass and its read-back.
+    pub gbuffer_seconds: f64,
+    /// The rounds of sensing and refinement.
+    pub sensing_seconds: f64,
+    /// Interpolation, filter, composition and the read-back of the image.
+    pub post_seconds: f64,
+    /// Host, within sensing: building views, recording and submitting batches.
+    pub host_record_seconds: f64,
+    /// Host, within sensing: waiting for batches to complete.
+    pub host_wait_seconds: f64,
+    /// Host, within sensing: the refinement's decisions between rounds.
+    pub host_refine_seconds: f64,
+    /// Device, by timestamp queries: the sensor maps and the reduction (absent without timestamps; on CPU
+    /// drivers clears may escape them).
+    pub gpu_maps_seconds: Option<f64>,
+    pub gpu_reduction_seconds: Option<f64>,
+}
+
+impl RenderTimes {
+    pub(super) fn new(
+        gbuffer: Duration,
+        sensing: Duration,
+        post: Duration,
+        refine: Duration,
+        batches: &BatchTimes,
+    ) -> Self {
+        Self {
+            gbuffer_seconds: gbuffer.as_secs_f64(),
+            sensing_seconds: sensing.as_secs_f64(),
+            post_seconds: post.as_secs_f64(),
+            host_record_seconds: batches.host_record.as_secs_f64(),
+            host_wait_seconds: batches.host_wait.as_secs_f64(),
+            host_refine_seconds: refine.as_secs_f64(),
+            gpu_maps_seconds: batches.gpu_maps.map(|d| d.as_secs_f64()),
+            gpu_reduction_seconds: batches.gpu_reduction.map(|d| d.as_secs_f64()),
+        }
+    }
+}
+
+/// What the render loop counted.
+pub(super) struct Counts {
+    pub sensors_per_round: Vec<u64>,
+    pub readback_bytes_per_round: Vec<u64>,
+    pub interpolated_quads: u64,
+}
+
+impl RenderStats {
+    pub(super) fn new(
+        device: &Device,
+        renderer: &Renderer,
+        size: ImageSize,
+        frame: &FrameParams,
+        counts: Counts,
+        total: Duration,
+        times: RenderTimes,
+    ) -> Self {
+        let total = total.as_secs_f64();
+        let sensors = counts.sensors_per_round.iter().sum();
+        Self {
+            device: device.adapter.name.clone(),
+            driver: device.adapter.driver.clone(),
+            sensor: renderer.config.sensor.to_string(),
+            strategy: renderer.strategy(),
+            sensor_size: renderer.config.sensor_size,
+            width: size.width,
+            height: size.height,
+            tile: frame.tile,
+            dradiance: frame.dradiance,
+            epsilon: frame.epsilon,
+            filter_radius: frame.filter_radius,
+            sensors,
+            sensors_per_round: counts.sensors_per_round,
+            readback_bytes_per_round: counts.readback_bytes_per_round,
+            interpolated_quads: counts.interpolated_quads,
+            batch_size: renderer.batch_size(),
+            batches: renderer.runner.times.batches,
+            in_flight: renderer.runner.in_flight(),
+            total_seconds: total,
+            times,
+            sensor_time_ms: if sensors > 0 { 1e3 * total / sensors as f64 } else { 0.0 },
+        }
+    }
+}
