@@ -1,5 +1,5 @@
 #version 460
-// Composition (DESIGN.md §3 step 7): final = Le + albedo * R.
+// Composition (docs/DESIGN.md §3 step 7): final = Le + albedo * R.
 #include "types.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;

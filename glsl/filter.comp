@@ -1,5 +1,5 @@
 #version 460
-// Id-constrained Gaussian filter (paper §III-H, DESIGN.md §3 step 6): a Gaussian of radius r (sigma = r/2)
+// Id-constrained Gaussian filter (paper §III-H, docs/DESIGN.md §3 step 6): a Gaussian of radius r (sigma = r/2)
 // over the radiance map that only takes samples of the centre pixel's surface id, renormalising the
 // weights over the samples it took. Surfaces never bleed into each other.
 #include "types.glsl"

@@ -1,5 +1,5 @@
 #version 460
-// Interpolation (paper §III-G, DESIGN.md §3 step 5): one workgroup per quad fills the quad's own pixels by
+// Interpolation (paper §III-G, docs/DESIGN.md §3 step 5): one workgroup per quad fills the quad's own pixels by
 // bilinear interpolation of its four sensed corners. Sensed pixels keep their value.
 #include "types.glsl"
 

@@ -1,5 +1,5 @@
 #version 460
-// Reduction (DESIGN.md §3 step 4): one workgroup per sensor computes R = (1/pi) * sum(Ck * w) over the
+// Reduction (docs/DESIGN.md §3 step 4): one workgroup per sensor computes R = (1/pi) * sum(Ck * w) over the
 // sensor's layers, with w the exact projected solid angle of each texel (src/sensors/weights.rs), and
 // writes it into the radiance map at the sensor's pixel with w = STATE_SENSED, and into the batch's
 // results (one vec4 per sensor, host-visible) so that the refinement reads back only what it sensed.

@@ -10,7 +10,7 @@ use glam::Vec4;
 
 use crate::gpu_types::{GpuSurface, Vertex};
 use crate::scene::{Mesh, Scene};
-use crate::vk::{Buffer, Device};
+use crate::vk::{Buffer, Device, transfer};
 
 pub struct GpuScene {
     pub vertices: Arc<Buffer>,
@@ -29,14 +29,14 @@ impl GpuScene {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             vertex_count: vertices.len() as u32,
-            vertices: Arc::new(Buffer::upload(
+            vertices: Arc::new(transfer::upload(
                 device,
                 "vertices",
                 &vertices,
                 vk::BufferUsageFlags::VERTEX_BUFFER | storage,
             )?),
-            normals: Arc::new(Buffer::upload(device, "triangle normals", &normals, storage)?),
-            surfaces: Arc::new(Buffer::upload(device, "surfaces", &surfaces(mesh), storage)?),
+            normals: Arc::new(transfer::upload(device, "triangle normals", &normals, storage)?),
+            surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh), storage)?),
         })
     }
 }

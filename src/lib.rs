@@ -1,6 +1,6 @@
 //! sensorlight: global illumination by Sensor-Based Lighting (Banquiero & Leone) on Vulkan.
 //!
-//! Module map, in pipeline order (DESIGN.md §3):
+//! Module map, in pipeline order (docs/DESIGN.md §3):
 //! - [`scene`]: TOML scene files, OBJ/MTL meshes, surface ids, the camera;
 //! - [`vk`]: the Vulkan layer (device, buffers, images, pipelines), one owner per object;
 //! - [`gpu_types`] (+ `glsl/types.glsl`): the structs shared with shaders; [`gpu_scene`]: the scene on the GPU;

@@ -176,7 +176,7 @@ impl Overrides {
     }
 }
 
-/// What a sensor sees (DESIGN.md §1–2); shared by the GPU renderer and the CPU reference.
+/// What a sensor sees (docs/DESIGN.md §1–2); shared by the GPU renderer and the CPU reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EstimatorParams {
     /// `hemicube` (default; the whole hemisphere) or `frustum` (the paper's single view of `fov`).

@@ -77,6 +77,18 @@ fn render_writes_image_aovs_and_stats_of_both_cornell_boxes() {
         assert_eq!(stats["sensors"].as_u64(), Some(sensed), "{name}: sensors counted = sensors in the mask");
         assert_eq!(stats["sensor_size"].as_u64(), Some(16));
         assert!(stats["sensor_time_ms"].as_f64().unwrap() > 0.0);
+        // Each round reads back the R of the sensors it placed (a vec4 each), not the whole map.
+        let per_round =
+            |key: &str| -> Vec<u64> { stats[key].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect() };
+        let (placed, read) = (per_round("sensors_per_round"), per_round("readback_bytes_per_round"));
+        assert_eq!(read, placed.iter().map(|n| 16 * n).collect::<Vec<_>>(), "{name}: read-back per round");
+        // The host's own work and waits lie within the sensing phase; the phases within the total.
+        let t = &stats["times"];
+        let f = |key: &str| t[key].as_f64().unwrap_or_else(|| panic!("{name}: times.{key} missing"));
+        let host = f("host_record_seconds") + f("host_wait_seconds") + f("host_refine_seconds");
+        assert!(host <= f("sensing_seconds") + 1e-6, "{name}: host {host} > sensing {}", f("sensing_seconds"));
+        let phases = f("gbuffer_seconds") + f("sensing_seconds") + f("post_seconds");
+        assert!(phases <= stats["total_seconds"].as_f64().unwrap() + 1e-6, "{name}: phases exceed the total");
     }
 }
 

@@ -9,14 +9,14 @@ use sensorlight::reference::post;
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::ImageSize;
 use sensorlight::sensors::SensorKind;
-use sensorlight::vk::{Access, Buffer, Image, ImageDesc, barrier, transfer};
+use sensorlight::vk::{Access, Image, ImageDesc, barrier, transfer};
 
 /// Runs the GPU filter over `source` with surface ids `ids`.
 fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec<Vec4> {
     common::gpu(|device| {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let src = Buffer::upload(device, "source", source, usage).unwrap();
-        let dst = Buffer::upload(device, "target", &vec![Vec4::splat(-1.0); source.len()], usage).unwrap();
+        let src = transfer::upload(device, "source", source, usage).unwrap();
+        let dst = transfer::upload(device, "target", &vec![Vec4::splat(-1.0); source.len()], usage).unwrap();
         let desc = ImageDesc {
             format: vk::Format::R32_UINT,
             width: size.width,

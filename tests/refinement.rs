@@ -11,7 +11,7 @@ use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
 use sensorlight::sensors::SensorKind;
 use sensorlight::sensors::refine::{Refinement, interpolate_cpu};
-use sensorlight::vk::{Access, Buffer, barrier, transfer};
+use sensorlight::vk::{Access, barrier, transfer};
 
 /// A synthetic G-buffer: every pixel a surface (ids from `id`), all facing +z.
 fn gbuffer(width: u32, height: u32, id: impl Fn(u32, u32) -> u32) -> GBufferData {
@@ -132,7 +132,7 @@ fn gpu_interpolation_matches_the_cpu_twin() {
     let size = ImageSize { width: w, height: h };
     let got = common::gpu(|device| {
         let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-        let radiance = Buffer::upload(device, "radiance", &initial, usage).unwrap();
+        let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
         let mut pass = InterpolatePass::new(device).unwrap();
         pass.bind(device, &quads, &radiance).unwrap();
         device

@@ -81,3 +81,28 @@ fn batching_does_not_change_the_result() {
     assert_eq!(one.stats.sensors, many.stats.sensors);
     assert!(one.radiance == many.radiance, "R differs between batch sizes");
 }
+
+/// Where the device's queue writes timestamps, the device's time for sensor maps and reduction comes from
+/// them: present, positive, and (one queue) within the wall time of the sensing phase.
+#[test]
+fn gpu_time_comes_from_timestamps_where_the_device_has_them() {
+    let scene = common::lightbox((24, 16));
+    let setup = common::every_pixel(SensorKind::Hemicube, 16, 0.1);
+    common::gpu(|device| {
+        let mut renderer = sensorlight::renderer::Renderer::builder(device, &scene, setup.estimator.sensor, setup.rd)
+            .build_unchecked(Default::default())
+            .unwrap();
+        let t = renderer.render(scene.image, &setup.frame, &sensorlight::renderer::Quiet).unwrap().stats.times;
+        if device.adapter.timestamp_valid_bits == 0 {
+            assert!(t.gpu_maps_seconds.is_none() && t.gpu_reduction_seconds.is_none());
+            return;
+        }
+        let (maps, reduction) = (t.gpu_maps_seconds.unwrap(), t.gpu_reduction_seconds.unwrap());
+        assert!(maps > 0.0 && reduction > 0.0, "maps {maps} s, reduction {reduction} s");
+        assert!(
+            maps + reduction <= 1.05 * t.sensing_seconds,
+            "GPU {maps} + {reduction} s > sensing {} s",
+            t.sensing_seconds
+        );
+    });
+}

@@ -8,7 +8,7 @@ use clap::Args;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Overrides, RenderParams};
-use sensorlight::renderer::{RenderOutput, RenderStats, Renderer};
+use sensorlight::renderer::{DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
 use sensorlight::strategy::{Cache, StrategyRequest};
 
 use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, sensor_size_help};
@@ -38,6 +38,9 @@ pub struct RenderArgs {
     /// local memory]
     #[arg(long)]
     memory_budget: Option<u64>,
+    /// Batches in flight: while the device renders one, the host prepares the next (each has its own maps)
+    #[arg(long, default_value_t = DEFAULT_IN_FLIGHT, value_parser = clap::value_parser!(u32).range(1..=8))]
+    in_flight: u32,
     /// How sensors are batched: auto (the fastest that passes its self-check here) or a strategy, used only
     /// if it passes its self-check
     #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
@@ -67,6 +70,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let mut report = super::report_strategy_event;
         let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
             .memory_budget(args.memory_budget.map(|mib| mib << 20))
+            .in_flight(args.in_flight)
             .strategy(args.strategy)
             .cache(&mut cache)
             .on_strategy_event(&mut report)

@@ -1,4 +1,4 @@
-//! Composition (DESIGN.md §3 step 7): `final = Le + albedo · R` from the G-buffer and the filtered radiance
+//! Composition (docs/DESIGN.md §3 step 7): `final = Le + albedo · R` from the G-buffer and the filtered radiance
 //! map. Shader: `glsl/compose.comp`.
 
 use std::sync::Arc;

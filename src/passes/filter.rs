@@ -1,4 +1,4 @@
-//! Id-constrained Gaussian filter (paper §III-H, DESIGN.md §3 step 6): a Gaussian of radius r, σ = r/2,
+//! Id-constrained Gaussian filter (paper §III-H, docs/DESIGN.md §3 step 6): a Gaussian of radius r, σ = r/2,
 //! over the radiance map, taking only samples of the centre pixel's surface id. Shader: `glsl/filter.comp`.
 //! CPU twin: [`crate::reference::post::filter`].
 

@@ -1,4 +1,4 @@
-//! G-buffer pass (paper §III-F, DESIGN.md §3 step 1): rasterises the scene from the camera into world
+//! G-buffer pass (paper §III-F, docs/DESIGN.md §3 step 1): rasterises the scene from the camera into world
 //! position, normal, albedo, emission and surface id at the output resolution. Shaders: `glsl/gbuffer.*`.
 
 use std::sync::Arc;

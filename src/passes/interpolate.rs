@@ -1,4 +1,4 @@
-//! Interpolation pass (paper §III-G, DESIGN.md §3 step 5): fills the quads the refinement accepted by
+//! Interpolation pass (paper §III-G, docs/DESIGN.md §3 step 5): fills the quads the refinement accepted by
 //! bilinear interpolation of their sensed corners. Shader: `glsl/interpolate.comp`, one workgroup per quad.
 //! CPU twin: [`crate::sensors::refine::interpolate_cpu`].
 
@@ -10,7 +10,7 @@ use ash::vk;
 use crate::gpu_types::{GpuQuad, ImagePush};
 use crate::scene::ImageSize;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Encoder};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, transfer};
 
 pub struct InterpolatePass {
     kernel: ComputeKernel,
@@ -34,7 +34,7 @@ impl InterpolatePass {
 
     /// Uploads `quads` and binds the radiance map they fill (call while the GPU is idle).
     pub fn bind(&mut self, device: &Arc<Device>, quads: &[GpuQuad], radiance: &Buffer) -> Result<()> {
-        let buffer = Buffer::upload(device, "interpolated quads", quads, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let buffer = transfer::upload(device, "interpolated quads", quads, vk::BufferUsageFlags::STORAGE_BUFFER)?;
         self.kernel.writer(0).storage_buffer(0, &buffer).storage_buffer(1, radiance).apply(device);
         self.quads = Some(buffer);
         self.count = quads.len() as u32;

@@ -1,4 +1,4 @@
-//! Reduction pass (DESIGN.md §3 step 4): each sensor's layers → `R = (1/π) Σ Ck·w` at the sensor's pixel of
+//! Reduction pass (docs/DESIGN.md §3 step 4): each sensor's layers → `R = (1/π) Σ Ck·w` at the sensor's pixel of
 //! the radiance map, and in the batch's results. Shader: `glsl/reduce.comp` (one workgroup per sensor, tree
 //! reduction in shared memory). One descriptor set per batch in flight, each bound to that batch's maps,
 //! pixel list and results.
@@ -12,7 +12,7 @@ use super::sensor_maps::MapLayout;
 use crate::gpu_types::ReducePush;
 use crate::sensors::{SensorKind, weights};
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Encoder, Image};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, Image, transfer};
 
 pub struct ReducePass {
     kernel: ComputeKernel,
@@ -46,7 +46,7 @@ impl ReducePass {
             slots,
         )?;
         let w: Vec<f32> = weights::sensor_weights(kind, rd).into_iter().map(|w| w as f32).collect();
-        let weights = Buffer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
         Ok(Self { kernel, weights, rd, layers: kind.layers() })
     }
 

@@ -1,4 +1,4 @@
-//! The estimator of DESIGN.md §1 by ray casting:
+//! The estimator of docs/DESIGN.md §1 by ray casting:
 //!
 //! `R(p) = (1/π) ∫ Ck(ray(p, ω)) cosθ dω`, `Ck = Ke` on the front of an emitter, `Kd·ε` elsewhere,
 //! the background where the ray leaves the scene; pixel = `Le + Kd·R`.

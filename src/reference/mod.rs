@@ -1,5 +1,5 @@
 //! The CPU reference: an independent implementation of the same estimator by ray casting, the oracle every
-//! GPU image is tested against (DESIGN.md §5).
+//! GPU image is tested against (docs/DESIGN.md §6).
 
 pub mod bvh;
 pub mod gbuffer;

@@ -1,4 +1,4 @@
-//! One render, end to end (DESIGN.md §3): G-buffer → sensors on the grid → rounds of refinement, each
+//! One render, end to end (docs/DESIGN.md §3): G-buffer → sensors on the grid → rounds of refinement, each
 //! sensing its pixels in batches on the GPU (sensor maps + reduction, several batches in flight) →
 //! interpolation → id-constrained filter → composition. The CPU decides where sensors go from the values
 //! each round sensed; every image operation runs on the GPU.

@@ -1,4 +1,4 @@
-//! Sensor placement and adaptive refinement (paper §III-G, DESIGN.md §3 step 2).
+//! Sensor placement and adaptive refinement (paper §III-G, docs/DESIGN.md §3 step 2).
 //!
 //! Sensors first go on a grid of step `dt` (plus the last row and column, so every pixel lies in a quad).
 //! Each quad of four sensed corners is then either interpolated, or split at its midpoints, whose new

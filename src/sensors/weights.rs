@@ -1,4 +1,4 @@
-//! Texel weights: the exact projected solid angle `∫ cosθ dω` of each sensor-map texel (DESIGN.md §2).
+//! Texel weights: the exact projected solid angle `∫ cosθ dω` of each sensor-map texel (docs/DESIGN.md §2).
 //!
 //! With them `R = (1/π) Σ Ck·w` is a quadrature of `(1/π) ∫ Ck cosθ dω` whose result does not depend on the
 //! map size, only its noise does. The paper's cross-product formula (its eq. 4) approximates the same

@@ -1,5 +1,5 @@
 //! How sensor maps are batched: the strategy kinds, their self-check, the cache of results, and the choice
-//! of a strategy for a device (DESIGN.md §5). The strategies themselves are GPU passes
+//! of a strategy for a device (docs/DESIGN.md §5). The strategies themselves are GPU passes
 //! (`passes::sensor_maps`); this module only decides which one to use. It renders nothing itself: what it
 //! must measure, it asks of a [`Prober`] (the renderer), so it depends on no pass and no oracle.
 //!

@@ -54,39 +54,6 @@ impl Buffer {
         Ok(buffer)
     }
 
-    /// A device-local buffer holding `data`, filled through a staging buffer.
-    pub fn upload<T: bytemuck::Pod>(
-        device: &Arc<Device>,
-        name: &str,
-        data: &[T],
-        usage: vk::BufferUsageFlags,
-    ) -> Result<Self> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let buffer = Self::new(
-            device,
-            name,
-            bytes.len() as u64,
-            usage | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?;
-        if bytes.is_empty() {
-            return Ok(buffer);
-        }
-        let mut staging = Self::new(
-            device,
-            "staging",
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        staging.write(0, data)?;
-        device.submit_and_wait(|enc| {
-            enc.copy(&staging, &buffer, bytes.len() as u64);
-            Ok(())
-        })?;
-        Ok(buffer)
-    }
-
     /// Writes `data` at byte `offset` of a host-visible buffer.
     pub fn write<T: bytemuck::Pod>(&mut self, offset: usize, data: &[T]) -> Result<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);

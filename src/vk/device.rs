@@ -3,14 +3,12 @@
 
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::adapter::{self, Adapter, Requirements};
-use super::encoder::Encoder;
 use super::instance::Instance;
 use super::validation::ValidationLog;
 
@@ -37,19 +35,20 @@ pub struct Device {
     pub raw: ash::Device,
     pub adapter: Adapter,
     /// Submissions to a queue must not overlap (Vulkan's external synchronisation rule).
-    queue: Mutex<vk::Queue>,
+    pub(super) queue: Mutex<vk::Queue>,
     pub queue_family: u32,
     allocator: ManuallyDrop<Mutex<Allocator>>,
-    submitter: Mutex<Submitter>,
+    /// For one-off submissions (`submit_and_wait`, in `submit.rs`).
+    pub(super) submitter: Mutex<Submitter>,
     // Declared last: dropped after `Drop::drop` has destroyed the device.
     instance: Instance,
 }
 
 /// A reusable command buffer and fence for record-submit-wait work.
-struct Submitter {
+pub(super) struct Submitter {
     pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
+    pub(super) cmd: vk::CommandBuffer,
+    pub(super) fence: vk::Fence,
 }
 
 impl Device {
@@ -118,40 +117,6 @@ impl Device {
 
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap()
-    }
-
-    /// Records `record` into a command buffer, submits it and waits: for one-off work (uploads,
-    /// read-backs). Returns the host time from submission to the fence.
-    pub fn submit_and_wait(&self, record: impl FnOnce(&Encoder<'_>) -> Result<()>) -> Result<Duration> {
-        let submitter = self.submitter.lock().unwrap();
-        let cmd = submitter.cmd;
-        // SAFETY: the command buffer is only used under the mutex and is idle (its fence was waited on).
-        unsafe {
-            self.raw.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            self.raw.begin_command_buffer(cmd, &begin)?;
-        }
-        let recorded = record(&Encoder::new(self, cmd));
-        // SAFETY: as above; the buffer is ended even when recording failed so that it can be reset later.
-        unsafe { self.raw.end_command_buffer(cmd)? };
-        recorded?;
-        let start = Instant::now();
-        self.submit(cmd, submitter.fence)?;
-        // SAFETY: the fence is owned by this submitter and was just submitted.
-        unsafe {
-            self.raw.wait_for_fences(&[submitter.fence], true, u64::MAX).context("vkWaitForFences")?;
-            self.raw.reset_fences(&[submitter.fence])?;
-        }
-        Ok(start.elapsed())
-    }
-
-    /// Submits one recorded command buffer that signals `fence` (unsignalled) when done.
-    pub(crate) fn submit(&self, cmd: vk::CommandBuffer, fence: vk::Fence) -> Result<()> {
-        let cmds = [cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        let queue = self.queue.lock().unwrap();
-        // SAFETY: the queue is used under its mutex; the command buffer is recorded and the fence unsignalled.
-        unsafe { self.raw.queue_submit(*queue, &submit, fence) }.context("vkQueueSubmit")
     }
 }
 

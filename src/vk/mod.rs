@@ -15,6 +15,7 @@ pub mod pipeline;
 pub mod query;
 pub mod render_pass;
 pub mod slot;
+pub mod submit;
 pub mod transfer;
 pub mod validation;
 

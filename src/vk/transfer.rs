@@ -34,6 +34,39 @@ fn whole_image(image: &Image) -> vk::BufferImageCopy {
         .image_extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })
 }
 
+/// A device-local buffer holding `data`, filled through a staging buffer.
+pub fn upload<T: bytemuck::Pod>(
+    device: &Arc<Device>,
+    name: &str,
+    data: &[T],
+    usage: vk::BufferUsageFlags,
+) -> Result<Buffer> {
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    let buffer = Buffer::new(
+        device,
+        name,
+        bytes.len() as u64,
+        usage | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?;
+    if bytes.is_empty() {
+        return Ok(buffer);
+    }
+    let mut staging = Buffer::new(
+        device,
+        "staging",
+        bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(0, data)?;
+    device.submit_and_wait(|enc| {
+        enc.copy(&staging, &buffer, bytes.len() as u64);
+        Ok(())
+    })?;
+    Ok(buffer)
+}
+
 /// Copies every layer of `image` (in `GENERAL` layout, its writers finished) to the host, layer-major, rows
 /// top to bottom, as `T` (e.g. `[f32; 4]` for RGBA32F, `u32` for R32_UINT, `[u16; 4]` for RGBA16F).
 pub fn read_image<T: bytemuck::Pod>(device: &Arc<Device>, image: &Image) -> Result<Vec<T>> {

@@ -1,4 +1,4 @@
-//! Sensor-map pass (paper §III-E, DESIGN.md §3 step 3): records batches of sensors' maps for the
+//! Sensor-map pass (paper §III-E, docs/DESIGN.md §3 step 3): records batches of sensors' maps for the
 //! reduction. How one batch is drawn is a [`Strategy`]; they all produce the same sensor maps (checked by
 //! `crate::strategy` before use) and differ only in speed:
 //!
