@@ -109,7 +109,7 @@ fn every_module_of_the_library_has_a_rule() {
     let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
     for line in lib.lines() {
         if let Some(name) = line.trim().strip_prefix("pub mod ") {
-            let name = name.trim_end_matches(|c| c == ';' || c == '{').trim();
+            let name = name.trim_end_matches([';', '{']).trim();
             assert!(RULES.iter().any(|(m, _)| *m == name), "module {name} has no layer rule in tests/layers.rs");
         }
     }
