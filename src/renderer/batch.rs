@@ -14,7 +14,7 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, ensure};
+use anyhow::{Context as _, Result, ensure};
 use ash::vk;
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
@@ -67,6 +67,9 @@ pub(crate) struct BatchRunner {
     reduce: ReducePass,
     /// How far a sensor sits above its surface (world units).
     bias: f32,
+    /// The radiance map the reductions write: every batch submitted keeps it alive until its fence
+    /// signals, so a render that fails with batches in flight cannot free it under the device.
+    radiance: Option<Arc<Buffer>>,
     device: Arc<Device>,
     pub times: BatchTimes,
 }
@@ -109,7 +112,16 @@ impl BatchRunner {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        Ok(Self { slots, next: 0, strategy, reduce, bias, device: device.clone(), times: BatchTimes::default() })
+        Ok(Self {
+            slots,
+            next: 0,
+            strategy,
+            reduce,
+            bias,
+            radiance: None,
+            device: device.clone(),
+            times: BatchTimes::default(),
+        })
     }
 
     pub fn kind(&self) -> StrategyKind {
@@ -127,13 +139,14 @@ impl BatchRunner {
 
     /// Makes the reductions write into `radiance` (a render's radiance map) and resets the times. No batch
     /// may be in flight: [`BatchRunner::drain`] first.
-    pub fn bind(&mut self, radiance: &Buffer) -> Result<()> {
+    pub fn bind(&mut self, radiance: &Arc<Buffer>) -> Result<()> {
         ensure!(self.slots.iter().all(|s| s.in_flight.is_empty()), "bind with batches in flight");
         for (i, slot) in self.slots.iter().enumerate() {
             let bindings =
                 ReduceBindings { maps: &slot.maps.maps, pixels: &slot.pixels, results: &slot.results, radiance };
             self.reduce.bind(&self.device, i, &bindings);
         }
+        self.radiance = Some(radiance.clone());
         self.times = BatchTimes::default();
         Ok(())
     }
@@ -147,6 +160,7 @@ impl BatchRunner {
         ck: CkParams,
         deliver: &mut dyn FnMut(&[u32], &[Vec4]),
     ) -> Result<()> {
+        let radiance = self.radiance.clone().context("sense before bind: no radiance map to write")?;
         for chunk in pixels.chunks(self.capacity() as usize) {
             let index = self.next;
             self.next = (self.next + 1) % self.slots.len();
@@ -177,6 +191,7 @@ impl BatchRunner {
                 Ok(())
             })?;
             slot.commands.submit()?;
+            slot.commands.retire(radiance.clone());
             slot.in_flight = chunk.to_vec();
             self.times.batches += 1;
             self.times.host_record += start.elapsed();
@@ -229,6 +244,7 @@ impl BatchRunner {
         let bindings =
             ReduceBindings { maps: &slot.maps.maps, pixels: &list, results: &slot.results, radiance: &scratch };
         self.reduce.bind(&self.device, 0, &bindings);
+        self.radiance = None; // slot 0 no longer writes the bound map: bind again before sensing
         let layout = self.strategy.map_layout();
         let time = self.device.submit_and_wait(|enc| {
             self.reduce.record(enc, 0, layout, count);

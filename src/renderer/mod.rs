@@ -184,7 +184,8 @@ pub struct RenderOutput {
 /// What one render writes on the GPU; dropped when the render returns (all its work waited for).
 struct Targets {
     gbuffer: GBuffer,
-    radiance: Buffer,
+    /// Shared with the batches in flight, which keep it alive until they complete.
+    radiance: Arc<Buffer>,
     filtered: Buffer,
     image: Buffer,
 }
@@ -264,7 +265,7 @@ impl Renderer {
     /// (views, recording, submissions, waits): for the strategy self-check and benchmarks.
     pub fn sense_at(&mut self, size: ImageSize, pixels: &[u32], frame: &FrameParams) -> Result<(Vec<Vec4>, Duration)> {
         let (_, g) = self.render_gbuffer(size)?;
-        let radiance = map_buffer(&self.device, "radiance map", size)?;
+        let radiance = Arc::new(map_buffer(&self.device, "radiance map", size)?);
         self.runner.bind(&radiance)?;
         let mut r = vec![Vec4::ZERO; g.surface.len()];
         let mut deliver = |p: &[u32], values: &[Vec4]| p.iter().zip(values).for_each(|(&i, &v)| r[i as usize] = v);
@@ -290,7 +291,7 @@ impl Renderer {
         let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
         let targets = Targets {
             gbuffer: gpu_gbuffer,
-            radiance: map_buffer(&device, "radiance map", size)?,
+            radiance: Arc::new(map_buffer(&device, "radiance map", size)?),
             filtered: map_buffer(&device, "filtered radiance map", size)?,
             image: map_buffer(&device, "final image", size)?,
         };
