@@ -20,7 +20,9 @@
 //! directions, with weight 1. The power heuristic rather than the balance one: the two densities differ by
 //! orders of magnitude over most of the domain (a small light: light points far better; a large light at a
 //! grazing angle: directions far better), which is where Veach (thesis §9.2.3) shows it removes most of the
-//! balance heuristic's remaining variance; measured on this estimator it halves the noise of a small light.
+//! balance heuristic's remaining variance. Measured at 1024 samples: 0.06 % against 0.10 % noise under a
+//! small light, 0.18 % against 0.33 % on the Cornell box with ε = 0 (equal with ε = 0.1, where the
+//! directions' `Kd·ε` dominates).
 //! A light sample is unoccluded when its ray's first hit beyond the near distance is the sampled triangle
 //! itself: exactly the rays on which a direction would have returned that triangle's `Ke`.
 //!
