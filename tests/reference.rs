@@ -188,6 +188,41 @@ fn a_light_straddling_the_frustum_edge_matches_the_clipped_polygon() {
     }
 }
 
+/// The hemisphere's edge: a wall light beside a tilted receiver, partly below its horizon, counts only above
+/// it (nothing else in the scene, so the part below is not hidden by a floor but by the domain alone).
+#[test]
+fn a_light_straddling_the_horizon_matches_the_clipped_polygon() {
+    let ke = 2.0;
+    let n = Vec3::new(0.3, 1.0, 0.2).normalize();
+    let light = common::rect(Vec3::new(1.0, 0.1, 0.0), Vec3::Y * 0.7, Vec3::Z * 0.5, -Vec3::X);
+    // Its corners, counter-clockwise seen from −x (the front).
+    let polygon: Vec<DVec3> = [(-1.0, 1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
+        .iter()
+        .map(|&(u, v)| DVec3::new(1.0, 0.1 + 0.7 * u, 0.5 * v))
+        .collect();
+    assert!(polygon::front_normal(&polygon).dot(DVec3::NEG_X) > 0.99);
+    let camera = Camera::look_at(Vec3::new(0.0, 3.0, 3.0), Vec3::ZERO, Vec3::Y, 60.0).unwrap();
+    let scene = common::scene(vec![("light", 0, light)], vec![common::material("light", 0.0, ke)], camera, (8, 8));
+    let integrator = Integrator::new(&scene, params(SensorKind::Hemicube, 0.0), 65536, 4).unwrap();
+    for p in [Vec3::ZERO, Vec3::new(0.2, 0.1, -0.3), Vec3::new(0.3, 0.4, 0.2)] {
+        let at = receiver(&scene, p, n);
+        let exact = exact_r(&at, Domain::Hemisphere, ke as f64, &polygon);
+        let unclipped =
+            ke as f64 * polygon::lambert(&polygon.iter().map(|&v| v - at.origin).collect::<Vec<_>>(), at.n) / PI;
+        assert!(unclipped < 0.95 * exact, "the horizon cuts the light: {unclipped} unclipped, {exact} clipped");
+        let estimate = integrator.radiance(p, n, 23);
+        let (r, noise) = (estimate.mean.x as f64, estimate.std_error.x as f64);
+        let error = relative_error(r, exact);
+        eprintln!(
+            "horizon at {p}: R {r:.6}, clipped exact {exact:.6} (unclipped {unclipped:.6}), error {:+.4} % \
+             (noise ±{:.4} %)",
+            100.0 * error,
+            100.0 * noise / exact
+        );
+        assert!(error.abs() < 0.003, "at {p}: {r} vs {exact}");
+    }
+}
+
 /// Thousands of emissive triangles of two brightnesses (a 64 × 64 checkerboard of Ke 1 and 4, 8192
 /// triangles): the light table picks by power and the result is the sum of the cells' exact values.
 #[test]
