@@ -8,7 +8,8 @@
 //! - [`sensors`]: sensor frames, layer layouts and texel weights (shared by GPU and CPU);
 //! - [`renderer`]: one render end to end, the passes in order; [`strategy`]: which sensor-map batching
 //!   strategy, self-checked and measured per device;
-//! - [`reference`]: the CPU ray-casting reference of the same estimator;
+//! - [`reference`](mod@reference): the CPU ray-casting reference of the same estimator; [`light`]: closed forms it is
+//!   tested against (exact polygon irradiance);
 //! - [`params`]: the algorithm's parameters, defaults and checks;
 //! - [`output`]: EXR and PNG writing, always atomic.
 
@@ -16,6 +17,7 @@ pub mod bench;
 pub mod gbuffer;
 pub mod gpu_scene;
 pub mod gpu_types;
+pub mod light;
 pub mod metrics;
 pub mod output;
 pub mod params;

@@ -23,7 +23,9 @@ pub struct ReferenceArgs {
     estimator: EstimatorFlags,
     #[command(flatten)]
     image: ImageFlags,
-    /// Directions per pixel, a multiple of 4 (powers of two stratify best)
+    /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
+    /// direction plus, if the scene has emitters, one point on an emitter, combined by multiple importance
+    /// sampling: up to 2 rays per sample
     #[arg(long, default_value_t = 1024)]
     samples: u32,
     /// Seed of the sample scrambling: the same seed writes the same file
@@ -38,8 +40,12 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;
     let integrator = Integrator::new(&scene, params, args.samples, args.seed)?;
+    let strategies = match integrator.emitters() {
+        0 => "a direction each: the scene has no emitters".to_string(),
+        n => format!("a direction + a point on one of {n} emitter triangles each"),
+    };
     eprintln!(
-        "reference: {}x{}, {} sensor domain, ε {}, {} directions per pixel ({REPLICATES} × {}), seed {}",
+        "reference: {}x{}, {} sensor domain, ε {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
         size.height,
         params.sensor,

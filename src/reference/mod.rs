@@ -4,6 +4,7 @@
 pub mod bvh;
 pub mod gbuffer;
 pub mod integrator;
+pub mod lights;
 pub mod post;
 pub mod ray;
 pub mod sampling;

@@ -100,6 +100,18 @@ pub fn furnace(ke: f32) -> Scene {
     scene(vec![("box", 0, tris)], vec![material("glow", 0.5, ke)], camera, (24, 24))
 }
 
+/// A small bright light (0.1 m square at 2 m, Ke 2000, facing down) over a 0.3 m square occluder at 0.6 m,
+/// above a 4 × 4 m floor (Kd 0.5), seen from above the shadow: the case a cosine-only oracle cannot check.
+pub fn small_light(size: (u32, u32)) -> Scene {
+    let groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, Vec3::Y)),
+        ("occluder", 0, rect(Vec3::new(0.25, 0.6, 0.0), Vec3::X * 0.15, Vec3::Z * 0.15, Vec3::Y)),
+        ("light", 1, rect(Vec3::new(0.0, 2.0, 0.0), Vec3::X * 0.05, Vec3::Z * 0.05, -Vec3::Y)),
+    ];
+    let camera = Camera::look_at(Vec3::new(1.4, 2.4, 1.2), Vec3::new(0.3, 0.0, 0.0), Vec3::Y, 40.0).unwrap();
+    scene(groups, vec![material("grey", 0.5, 0.0), material("light", 0.0, 2000.0)], camera, size)
+}
+
 /// The built-in lightbox (see `scene::builtin`) at `size`.
 pub fn lightbox(size: (u32, u32)) -> Scene {
     builtin_lightbox(ImageSize { width: size.0, height: size.1 })
