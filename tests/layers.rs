@@ -13,11 +13,12 @@ const RULES: &[(&str, &[&str])] = &[
     ("gpu_types", &[]),
     ("shaders", &[]),
     // CPU algorithms.
+    ("light", &["scene"]),
     ("gbuffer", &["scene"]),
     ("sensors", &["scene", "gbuffer", "gpu_types"]),
     ("params", &["sensors"]),
     // The oracle: CPU only, never a GPU pass.
-    ("reference", &["scene", "gbuffer", "sensors", "params"]),
+    ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
     ("strategy", &["sensors", "vk", "output", "shaders"]),
     // The GPU side.
