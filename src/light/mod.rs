@@ -2,6 +2,8 @@
 //! exact unoccluded emitter term on the GPU compute without sampling.
 //!
 //! - [`polygon`]: the irradiance from a uniform Lambertian polygon (Lambert's formula), clipped to a sensor's
-//!   domain.
+//!   domain;
+//! - [`groups`]: the scene's emitters gathered into light groups, whose visibility sensors measure apart.
 
+pub mod groups;
 pub mod polygon;
