@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Result, ensure};
 use clap::Args;
 use sensorlight::bench::{self, BenchConfig, BenchReport};
+use sensorlight::outln;
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
 use sensorlight::params::EstimatorParams;
@@ -87,7 +88,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             }
         })?;
         bar.finish_and_clear();
-        print_report(&report);
+        // The files first: a reader of the table that stops early (`| head`) does not lose them.
         if let Some(path) = &args.json {
             atomic::write_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
         }
@@ -97,26 +98,30 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         if let Some(path) = &args.plot {
             plot(&report).write_svg(path)?;
         }
-        Ok(())
+        print_report(&report)
     })
 }
 
-fn print_report(r: &BenchReport) {
-    println!("device: {} ({})", r.device, r.driver);
-    println!(
+fn print_report(r: &BenchReport) -> Result<()> {
+    outln!("device: {} ({})", r.device, r.driver)?;
+    outln!(
         "scene: {} ({} triangles); {} sensors, {} per run, {} timed runs each, interleaved; medians [min–max]",
-        r.scene, r.triangles, r.sensor, r.sensors, r.repeat
-    );
+        r.scene,
+        r.triangles,
+        r.sensor,
+        r.sensors,
+        r.repeat
+    )?;
     for (kind, why) in &r.skipped {
-        println!("not measured: {kind}: {why}");
+        outln!("not measured: {kind}: {why}")?;
     }
-    println!("\n| rd | strategy | sensors/s [min–max] | Mtexel/s | vs per-sensor | vs raw fill |");
-    println!("|---:|---|---:|---:|---:|---:|");
+    outln!("\n| rd | strategy | sensors/s [min–max] | Mtexel/s | vs per-sensor | vs raw fill |")?;
+    outln!("|---:|---|---:|---:|---:|---:|")?;
     for m in &r.measurements {
         let n = r.sensors as f64;
         let fastest = m.seconds.iter().copied().fold(f64::INFINITY, f64::min);
         let slowest = m.seconds.iter().copied().fold(0.0, f64::max);
-        println!(
+        outln!(
             "| {} | {} | {:.0} [{:.0}–{:.0}] | {:.1} | {} | {:.0} % |",
             m.rd,
             m.strategy,
@@ -126,20 +131,21 @@ fn print_report(r: &BenchReport) {
             m.texels_per_second * 1e-6,
             m.vs_per_sensor.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
             100.0 * m.vs_fill
-        );
+        )?;
     }
-    println!("\n| rd | raw fill Mtexel/s | reduction alone, sensors/s | reduction share of the best | best |");
-    println!("|---:|---:|---:|---:|---|");
+    outln!("\n| rd | raw fill Mtexel/s | reduction alone, sensors/s | reduction share of the best | best |")?;
+    outln!("|---:|---:|---:|---:|---|")?;
     for s in &r.sizes {
-        println!(
+        outln!(
             "| {} | {:.1} | {:.0} | {:.0} % | {} |",
             s.rd,
             s.fill_texels_per_second * 1e-6,
             1.0 / s.reduction_seconds_per_sensor,
             100.0 * s.reduction_share_of_best,
             s.best
-        );
+        )?;
     }
+    Ok(())
 }
 
 fn plot(r: &BenchReport) -> Chart<'static> {

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
+use sensorlight::outln;
 use sensorlight::output::compare::compare_files;
 
 #[derive(Args)]
@@ -20,9 +21,12 @@ pub struct CompareArgs {
 
 pub fn run(args: CompareArgs) -> Result<ExitCode> {
     let a = compare_files(&args.image, &args.reference, &args.layer)?;
-    println!(
+    outln!(
         "relative RMSE {:.4}, relative mean absolute error {:.4}, relative bias {:+.4}, over {} pixels",
-        a.relative_rmse, a.relative_mean_abs, a.relative_bias, a.pixels
-    );
+        a.relative_rmse,
+        a.relative_mean_abs,
+        a.relative_bias,
+        a.pixels
+    )?;
     Ok(ExitCode::SUCCESS)
 }
