@@ -45,7 +45,10 @@ impl ExrImage {
             .into_iter()
             .map(|(name, data)| AnyChannel::new(name.as_str(), FlatSamples::F32(data)))
             .collect();
-        let image = Image::from_channels((self.width, self.height), AnyChannels::sort(channels));
+        // Blocks stored in increasing order: the same image is then the same file, byte for byte (the exr
+        // crate's default, "unspecified", stores them in the order its threads finish compressing them).
+        let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+        let image = Image::from_encoded_channels((self.width, self.height), encoding, AnyChannels::sort(channels));
         atomic::write_file(path, |w| Ok(image.write().to_buffered(w)?))
     }
 }
