@@ -10,9 +10,10 @@
 //!   strategy, self-checked and measured per device;
 //! - [`reference`]: the CPU ray-casting reference of the same estimator;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
-//! - [`output`]: EXR and PNG writing, always atomic.
+//! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user.
 
 pub mod bench;
+pub mod errors;
 pub mod gbuffer;
 pub mod gpu_scene;
 pub mod gpu_types;

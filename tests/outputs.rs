@@ -1,8 +1,12 @@
-//! What the commands write, as a user meets it: the same command writes the same bytes.
+//! What the commands write, as a user meets it: outputs never clobber one another, an input or a special
+//! file; a failed run leaves none of its outputs; a full disk is said once; the same command writes the
+//! same bytes.
 
 mod common;
 
+use std::os::unix::fs::FileTypeExt as _;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 const CORNELL: &str = "scenes/cornell/cornell.toml";
 /// A small, fast CPU reference of the Cornell box.
@@ -10,6 +14,134 @@ const SMALL_REFERENCE: [&str; 6] = ["--width", "24", "--height", "16", "--sample
 
 fn path(p: &Path) -> &str {
     p.to_str().unwrap()
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// `--stats-json` (or any output) naming another output or an input is refused before any work, whichever
+/// way the name is spelt, and nothing is touched.
+#[test]
+fn outputs_that_name_the_same_file_are_refused() {
+    let dir = common::scratch("outputs_alias");
+    std::fs::create_dir(dir.join("sub")).unwrap();
+    let exr = dir.join("out.exr");
+    std::fs::write(dir.join("out.png"), b"old preview").unwrap();
+    std::os::unix::fs::symlink(dir.join("out.png"), dir.join("link.json")).unwrap();
+    let scene = common::project(CORNELL);
+    let cases = [
+        (dir.join("out.exr"), "same file"),
+        (dir.join("out.png"), "same file"),
+        (dir.join("sub/../out.png"), "same file"),
+        (dir.join("link.json"), "same file"),
+        (scene.clone(), "would overwrite the input"),
+    ];
+    for (stats, expected) in &cases {
+        let args = ["render", path(&scene), "-o", path(&exr), "--stats-json", path(stats)];
+        let stderr = common::expect_failure(&args, expected);
+        assert!(stderr.contains("--stats-json"), "names the flag: {stderr}");
+        assert_eq!(listing(&dir), ["link.json", "out.png", "sub"], "{stats:?}");
+        assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"old preview");
+    }
+    // bench's reports, checked before the scene is even read.
+    let json = dir.join("r.json");
+    let (json, csv) = (path(&json), path(&dir.join("sub/../r.json")).to_owned());
+    common::expect_failure(&["bench", "--scene", "no-such-scene.toml", "--json", json, "--csv", &csv], "same file");
+}
+
+/// A FIFO, a device, a directory or a link to one of them is never replaced by a regular file; a link to a
+/// regular file is written through, and stays a link.
+#[test]
+fn special_files_are_refused_and_links_written_through() {
+    let dir = common::scratch("outputs_special");
+    let fifo = dir.join("stats.json");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    std::os::unix::fs::symlink("/dev/null", dir.join("null.exr")).unwrap();
+    std::fs::create_dir(dir.join("out.png")).unwrap();
+    let (exr, scene, null) = (dir.join("out.exr"), common::project(CORNELL), dir.join("null.exr"));
+    let cases: [(&[&str], &str); 4] = [
+        (&["-o", path(&exr), "--no-png", "--stats-json", path(&fifo)], "named pipe"),
+        (&["-o", path(&null), "--no-png"], "symbolic link to /dev/null"),
+        (&["-o", path(&exr)], "is a directory"),
+        (&["-o", path(&exr), "--no-png", "--stats-json", "/dev/null"], "is a device"),
+    ];
+    for (flags, expected) in cases {
+        let mut args = vec!["render", path(&scene)];
+        args.extend_from_slice(flags);
+        common::expect_failure(&args, expected);
+    }
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO is still a FIFO");
+    assert!(std::fs::symlink_metadata(dir.join("null.exr")).unwrap().file_type().is_symlink());
+    assert!(!exr.exists());
+
+    std::fs::create_dir(dir.join("results")).unwrap();
+    let real = dir.join("results/real.exr");
+    std::fs::write(&real, b"old").unwrap();
+    let link = dir.join("link.exr");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let mut args = vec!["reference", CORNELL, "-o", path(&link), "--no-png"];
+    args.extend_from_slice(&SMALL_REFERENCE);
+    let run = common::sensorlight(&args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+    let (w, h, _) = sensorlight::output::exr::read_channels(&real, &["R"]).unwrap();
+    assert_eq!((w, h), (24, 16), "its target holds the new image");
+    assert_eq!(listing(&dir.join("results")), ["real.exr"], "no temporary left beside the target");
+}
+
+/// Runs `script` with `sh` in a new user and mount namespace, where it may mount a small tmpfs; `None` where
+/// this system allows no such namespace.
+fn in_mount_namespace(script: &str, args: &[&str]) -> Option<std::process::Output> {
+    let probe = Command::new("unshare").args(["-rm", "true"]).output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: unshare -rm is not permitted here, so no small file system can be mounted");
+        return None;
+    }
+    let mut command = Command::new("unshare");
+    command.args(["-rm", "sh", "-c", script, "sh"]).args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
+    command.env("SENSORLIGHT_CACHE_DIR", Path::new(env!("CARGO_TARGET_TMPDIR")).join("strategy-cache"));
+    Some(command.output().unwrap())
+}
+
+/// On a small file system (a tmpfs in a private mount namespace): the EXR does not fit, and the message
+/// says "No space left on device" once; the EXR fits but the PNG after it does not, and the EXR is not left
+/// behind (a failed run leaves no output of its own) while the PNG that was there before is kept.
+#[test]
+fn a_full_disk_leaves_no_output_and_is_said_once() {
+    let dir = common::scratch("outputs_full");
+    let probe = dir.join("probe.exr");
+    let mut args = vec!["reference", CORNELL, "-o", path(&probe)];
+    args.extend_from_slice(&SMALL_REFERENCE);
+    let run = common::sensorlight(&args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let exr_pages = std::fs::metadata(&probe).unwrap().len().div_ceil(4096);
+    let mnt = dir.join("mnt");
+    std::fs::create_dir(&mnt).unwrap();
+    // $1 binary, $2 mount point, $3 tmpfs size in KiB; the rest are sensorlight's arguments.
+    let script = r#"bin=$1; mnt=$2; size=$3; shift 3
+        mount -t tmpfs -o size=${size}k tmpfs "$mnt" || exit 99
+        printf 'old preview' > "$mnt/out.png"
+        "$bin" "$@"; code=$?
+        echo "listing: $(ls -A "$mnt" | tr '\n' ' ')"
+        echo "png: $(cat "$mnt/out.png")"
+        exit $code"#;
+    let out = path(&mnt.join("out.exr")).to_owned();
+    for (case, pages) in [("the EXR does not fit", 1), ("the PNG does not fit", exr_pages + 1)] {
+        let size = (pages * 4).to_string();
+        let mut args = vec![env!("CARGO_BIN_EXE_sensorlight"), path(&mnt), &size, "reference", CORNELL, "-o", &out];
+        args.extend_from_slice(&SMALL_REFERENCE);
+        let Some(run) = in_mount_namespace(script, &args) else { return };
+        let (stdout, stderr) = (String::from_utf8_lossy(&run.stdout), common::stderr(&run));
+        assert_eq!(run.status.code(), Some(1), "{case}: {stdout}{stderr}");
+        assert_eq!(stderr.matches("No space left on device").count(), 1, "{case}: said once: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(stdout.contains("listing: out.png \n"), "{case}: no output and no temporary left: {stdout}");
+        assert!(stdout.contains("png: old preview"), "{case}: the old PNG is untouched: {stdout}");
+    }
 }
 
 fn without_times(mut stats: serde_json::Value) -> serde_json::Value {

@@ -54,9 +54,10 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(plot) = &args.plot {
         atomic::check_extension(plot, "svg")?;
     }
-    for path in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
-        atomic::check_writable(path)?;
-    }
+    let outputs = [("--json", &args.json), ("--csv", &args.csv), ("--plot", &args.plot)];
+    let outputs: Vec<(&str, &std::path::Path)> =
+        outputs.iter().filter_map(|(flag, path)| path.as_deref().map(|p| (*flag, p))).collect();
+    atomic::check_outputs(&outputs, &args.scene.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
     let strategies = if args.strategies.is_empty() {
         StrategyKind::ALL.to_vec()
     } else {
@@ -89,15 +90,17 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         })?;
         bar.finish_and_clear();
         // The files first: a reader of the table that stops early (`| head`) does not lose them.
+        let mut files = atomic::Outputs::new();
         if let Some(path) = &args.json {
-            atomic::write_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
+            files.stage_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
         }
         if let Some(path) = &args.csv {
-            atomic::write_bytes(path, report.csv().as_bytes())?;
+            files.stage_bytes(path, report.csv().as_bytes())?;
         }
         if let Some(path) = &args.plot {
-            plot(&report).write_svg(path)?;
+            files.stage_bytes(path, plot(&report).svg()?.as_bytes())?;
         }
+        files.commit()?;
         print_report(&report)
     })
 }
