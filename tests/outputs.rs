@@ -47,10 +47,16 @@ fn outputs_that_name_the_same_file_are_refused() {
         assert_eq!(listing(&dir), ["link.json", "out.png", "sub"], "{stats:?}");
         assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"old preview");
     }
-    // bench's reports, checked before the scene is even read.
+    // bench's reports (checked before the scene is even read), and compare's --json against its inputs.
     let json = dir.join("r.json");
     let (json, csv) = (path(&json), path(&dir.join("sub/../r.json")).to_owned());
     common::expect_failure(&["bench", "--scene", "no-such-scene.toml", "--json", json, "--csv", &csv], "same file");
+    let image = dir.join("image.exr");
+    sensorlight::output::exr::ExrImage::new(2, 1).scalar("R", vec![1.0, 2.0]).write(&image).unwrap();
+    let before = std::fs::read(&image).unwrap();
+    let stderr = common::expect_failure(&["compare", path(&image), path(&image), "--json", path(&image)], "--json");
+    assert!(stderr.contains("would overwrite the input"), "{stderr}");
+    assert_eq!(std::fs::read(&image).unwrap(), before, "the input is untouched");
 }
 
 /// A FIFO, a device, a directory or a link to one of them is never replaced by a regular file; a link to a
