@@ -181,3 +181,66 @@ fn comments_and_ignored_statements_are_tolerated() {
     assert_eq!(scene.mesh.triangles.len(), 2);
     assert!(scene.warnings.iter().any(|w| w.contains("cstype")), "{:?}", scene.warnings);
 }
+
+/// Loads `obj` (and `extra` files beside it) as the mesh of a default scene.
+fn load_with(name: &str, obj: &str, extra: &[(&str, &str)]) -> Scene {
+    let dir = common::scratch(name);
+    for (file, contents) in extra {
+        std::fs::write(dir.join(file), contents).unwrap();
+    }
+    Scene::load(&write_scene(&dir, Some(obj), None)).unwrap_or_else(|e| panic!("{name}: {e:#}"))
+}
+
+fn kd_of_first_triangle(scene: &Scene) -> Vec3 {
+    scene.mesh.material_of(scene.mesh.triangles[0].surface).kd
+}
+
+/// Files saved by Windows editors start with a UTF-8 byte order mark; it is not part of the first statement.
+#[test]
+fn a_byte_order_mark_is_accepted_in_obj_and_mtl() {
+    let obj = format!("\u{feff}mtllib m.mtl\nusemtl a\n{QUAD}");
+    let scene = load_with("bom", &obj, &[("m.mtl", "\u{feff}newmtl a\nKd 0.2 0.3 0.4\nKe 1 1 1\n")]);
+    assert_eq!(kd_of_first_triangle(&scene), Vec3::new(0.2, 0.3, 0.4), "{:?}", scene.warnings);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
+/// Any whitespace separates a statement from its arguments, tabs included.
+#[test]
+fn tabs_separate_statements_from_names() {
+    let obj = format!("mtllib\tm.mtl\nusemtl \t a\ng\twall\n{}", QUAD.replace(' ', "\t"));
+    let scene = load_with("tabs", &obj, &[("m.mtl", "newmtl\ta\nKd\t0.2 \t0.3\t0.4\nKe\t1\t1\t1\n")]);
+    assert_eq!(kd_of_first_triangle(&scene), Vec3::new(0.2, 0.3, 0.4), "{:?}", scene.warnings);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.mesh.surfaces[0].name, "wall/a");
+}
+
+/// A polyline of three points is a line, not a triangle; a point is not geometry either.
+#[test]
+fn lines_and_points_are_not_triangles() {
+    let scene = load_with("polyline", &format!("{QUAD}v 0 0 1\nl 1 2 5\np 1 2 5\nl 2 5\n"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2, "only the quad");
+}
+
+/// `vt u` (v defaults to 0 in the OBJ format) is accepted; `vn` needs three values, said with the line.
+#[test]
+fn texture_coordinates_and_normals_take_their_arities() {
+    let scene = load_with("vt_one", &format!("vt 0.5\n{QUAD}"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2);
+    rejects("vn_two", Some(&format!("{QUAD}vn 0 1\n")), None, &["mesh.obj:6", "'vn' takes 3"]);
+    rejects("vt_four", Some(&format!("{QUAD}vt 0 1 0 1\n")), None, &["mesh.obj:6", "'vt' takes 1 to 3"]);
+}
+
+/// A weight w divides the coordinates: one that makes them overflow is refused with the line.
+#[test]
+fn a_vertex_weight_that_overflows_is_an_error() {
+    rejects("tiny_w", Some(&format!("{QUAD}v 1 1 1 1e-40\n")), None, &["mesh.obj:6", "not finite"]);
+}
+
+/// A mesh that is a device or a directory is refused at once: reading /dev/zero would never end.
+#[test]
+fn a_mesh_that_is_not_a_regular_file_is_refused() {
+    let body = format!("mesh = \"/dev/zero\"\n{CAMERA}");
+    rejects("mesh_device", None, Some(&body), &["/dev/zero", "not a regular file"]);
+    let body = format!("mesh = \".\"\n{CAMERA}");
+    rejects("mesh_directory", None, Some(&body), &["cannot read mesh: it is a directory"]);
+}
