@@ -214,6 +214,16 @@ fn tabs_separate_statements_from_names() {
     assert_eq!(scene.mesh.surfaces[0].name, "wall/a");
 }
 
+/// Coordinates of 1e30 are finite, but the triangle's area is not: that is said, not "degenerate".
+#[test]
+fn a_triangle_whose_area_overflows_f32_is_an_error() {
+    let obj = "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n";
+    rejects("area_overflow", Some(obj), None, &["mesh.obj", "too large for 32-bit floats", "area"]);
+    let dir = common::scratch("area_overflow_message");
+    let message = format!("{:#}", Scene::load(&write_scene(&dir, Some(obj), None)).unwrap_err());
+    assert!(!message.contains("degenerate"), "{message}");
+}
+
 /// A polyline of three points is a line, not a triangle; a point is not geometry either.
 #[test]
 fn lines_and_points_are_not_triangles() {
@@ -234,6 +244,26 @@ fn texture_coordinates_and_normals_take_their_arities() {
 #[test]
 fn a_vertex_weight_that_overflows_is_an_error() {
     rejects("tiny_w", Some(&format!("{QUAD}v 1 1 1 1e-40\n")), None, &["mesh.obj:6", "not finite"]);
+}
+
+#[test]
+fn a_scene_without_emitters_is_warned_about() {
+    let scene = load_with("no_emitters", QUAD, &[]);
+    let warning = scene.warnings.iter().find(|w| w.contains("emits")).unwrap_or_else(|| panic!("{:?}", scene.warnings));
+    assert!(warning.contains("ε = 0"), "{warning}");
+    let lit =
+        load_with("emitters", &format!("mtllib m.mtl\nusemtl glow\n{QUAD}"), &[("m.mtl", "newmtl glow\nKe 1 1 1\n")]);
+    assert!(lit.warnings.is_empty(), "{:?}", lit.warnings);
+}
+
+#[test]
+fn an_albedo_above_one_is_warned_about_by_name() {
+    let mtl = "newmtl hot\nKd 1.2 0.5 0.5\nnewmtl fine\nKd 1 1 1\nKe 1 1 1\nnewmtl unused\nKd 3 3 3\n";
+    let obj = format!("mtllib m.mtl\nusemtl hot\n{QUAD}usemtl fine\nv 0 0 1\nf 1 2 5\n");
+    let scene = load_with("kd_above_one", &obj, &[("m.mtl", mtl)]);
+    let gains: Vec<&String> = scene.warnings.iter().filter(|w| w.contains("Kd")).collect();
+    assert_eq!(gains.len(), 1, "only 'hot' (used, above 1): {:?}", scene.warnings);
+    assert!(gains[0].contains("'hot'") && gains[0].contains("1.2") && gains[0].contains("energy"), "{}", gains[0]);
 }
 
 /// A mesh that is a device or a directory is refused at once: reading /dev/zero would never end.
