@@ -274,3 +274,11 @@ fn a_mesh_that_is_not_a_regular_file_is_refused() {
     let body = format!("mesh = \".\"\n{CAMERA}");
     rejects("mesh_directory", None, Some(&body), &["cannot read mesh: it is a directory"]);
 }
+
+/// Found by the fuzz harness: the index -9223372036854775808 (i64::MIN) has no positive counterpart in an
+/// i64; negating it wrapped around and passed the check, and tobj then failed without a line.
+#[test]
+fn the_most_negative_face_index_names_its_line() {
+    let obj = format!("{QUAD}f 1 -9223372036854775808 2\n");
+    rejects("index_min", Some(&obj), None, &["mesh.obj:6", "index -9223372036854775808"]);
+}

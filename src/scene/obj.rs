@@ -326,8 +326,9 @@ fn check_face_vertex(vertex: &str, counts: &[usize; 3]) -> Result<(), String> {
             continue;
         }
         let index: i64 = part.parse().map_err(|_| format!("'{part}' is not an integer index"))?;
-        let count = counts[slot] as i64;
-        let valid = (index > 0 && index <= count) || (index < 0 && -index <= count);
+        let count = counts[slot] as u64;
+        // unsigned_abs: -i64::MIN does not fit an i64.
+        let valid = index != 0 && index.unsigned_abs() <= count;
         if !valid {
             let what = ["vertex", "texture coordinate", "normal"][slot];
             return Err(format!("{what} index {index} does not refer to one of the {count} defined so far"));
