@@ -7,8 +7,9 @@
 //! has finite triangles, unit normals, a finite camera and valid render parameters.
 //!
 //! The budget is small and fixed so that CI stays fast and repeatable: a fixed seed and a few hundred cases
-//! per property (600 for generated OBJ and MTL lines, 300 for the rest): a second or two in all. Fuzz longer with another seed, e.g.
-//! `PROPTEST_CASES=20000 PROPTEST_RNG_SEED=$RANDOM cargo test --release --test fuzz_loaders`.
+//! per property (600 for generated OBJ and MTL lines, 300 for the rest), a second or two in all. Fuzz longer
+//! with another seed, e.g. `PROPTEST_CASES=20000 PROPTEST_RNG_SEED=$RANDOM cargo test --release --test
+//! fuzz_loaders`.
 //! A failure prints the shrunk input; each bug found gets a plain regression test in `tests/scenes.rs`.
 
 mod common;

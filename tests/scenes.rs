@@ -282,3 +282,23 @@ fn the_most_negative_face_index_names_its_line() {
     let obj = format!("{QUAD}f 1 -9223372036854775808 2\n");
     rejects("index_min", Some(&obj), None, &["mesh.obj:6", "index -9223372036854775808"]);
 }
+
+/// Vectors that are finite but whose length overflows f32 were "coinciding" or "parallel"; say what it is,
+/// and accept a long `up`, whose length does not matter.
+#[test]
+fn huge_camera_vectors_are_told_apart() {
+    let camera = |eye: &str, target: &str, up: &str| {
+        format!(
+            "mesh = \"mesh.obj\"\n[camera]\neye = {eye}\ntarget = {target}\nup = {up}\nvfov_deg = 40\n[image]\nwidth = 8\nheight = 8\n"
+        )
+    };
+    let far = camera("[3e38, 0, 5]", "[-3e38, 0, 0]", "[0, 1, 0]");
+    rejects("camera_far", Some(QUAD), Some(&far), &["scene.toml: [camera]", "too far apart for 32-bit floats"]);
+    let dir = common::scratch("camera_long_up");
+    let scene = Scene::load(&write_scene(&dir, Some(QUAD), Some(&camera("[0, 0, 5]", "[0, 0, 0]", "[0, 3e38, 0]"))));
+    let scene = scene.unwrap_or_else(|e| panic!("{e:#}"));
+    assert!((scene.camera.up - Vec3::Y).length() < 1e-6, "{:?}", scene.camera);
+    let dir = common::scratch("camera_long_view");
+    let scene = Scene::load(&write_scene(&dir, Some(QUAD), Some(&camera("[0, 0, 2e38]", "[0, 0, 0]", "[0, 1, 0]"))));
+    assert!((scene.unwrap_or_else(|e| panic!("{e:#}")).camera.forward + Vec3::Z).length() < 1e-6);
+}
