@@ -182,3 +182,15 @@ fn a_closed_stdout_ends_quietly() {
     }
     assert!(json.exists(), "bench wrote its report before the table");
 }
+
+/// Standard output on a full disk (`> /dev/full`) is an error like any other: exit 1, said once.
+#[test]
+fn a_full_stdout_is_an_error_said_once() {
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let run = common::command().arg("devices").stdout(full).output().unwrap();
+    let stderr = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cannot write to standard output"), "{stderr}");
+    assert_eq!(stderr.matches("No space left on device").count(), 1, "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
