@@ -302,3 +302,11 @@ fn huge_camera_vectors_are_told_apart() {
     let scene = Scene::load(&write_scene(&dir, Some(QUAD), Some(&camera("[0, 0, 2e38]", "[0, 0, 0]", "[0, 1, 0]"))));
     assert!((scene.unwrap_or_else(|e| panic!("{e:#}")).camera.forward + Vec3::Z).length() < 1e-6);
 }
+
+/// Found by the fuzz harness: vertex colours (`v x y z r g b`) on some vertices and not on others made tobj
+/// fail without a line when a face used an uncoloured one. This renderer does not use vertex colours.
+#[test]
+fn vertex_colours_on_some_vertices_are_ignored() {
+    let scene = load_with("vertex_colours", &format!("v 0 0 0 1 0 0\n{QUAD}"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2);
+}

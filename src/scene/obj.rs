@@ -2,10 +2,10 @@
 //!
 //! The checking pass also fixes what real files do and `tobj` does not expect: a UTF-8 byte order mark,
 //! `# comments` after values, tabs or several spaces after a statement's keyword (it rewrites each statement
-//! as keyword, one space, arguments), `vt u` without v, statements `tobj` does not know (curves, `lod`, …;
-//! dropped with a warning), and an `mtllib` path written relative to some other directory (looked for by file
-//! name next to the OBJ). Lines (`l`) and points (`p`) are checked and dropped: `tobj` would make a triangle of
-//! a three-point line.
+//! as keyword, one space, arguments), `vt u` without v, vertex colours on some vertices only (dropped: unused
+//! here), statements `tobj` does not know (curves, `lod`, …; dropped with a warning), and an `mtllib` path
+//! written relative to some other directory (looked for by file name next to the OBJ). Lines (`l`) and points
+//! (`p`) are checked and dropped: `tobj` would make a triangle of a three-point line.
 
 use std::cell::RefCell;
 use std::collections::BTreeSet;
@@ -231,6 +231,11 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                     if let Some(bad) = values[..3].iter().map(|x| x / w).find(|x| !x.is_finite()) {
                         return Err(err(format!("vertex coordinate divided by its weight w {w} is {bad}, not finite")));
                     }
+                }
+                if args.len() == 6 {
+                    // Vertex colours are not used here, and tobj fails on a face whose vertices are not all
+                    // coloured: keep the position only.
+                    line = format!("v {} {} {}", args[0], args[1], args[2]);
                 }
                 counts[0] += 1;
             }
