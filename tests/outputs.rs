@@ -47,6 +47,23 @@ fn outputs_that_name_the_same_file_are_refused() {
         assert_eq!(listing(&dir), ["link.json", "out.png", "sub"], "{stats:?}");
         assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"old preview");
     }
+    // The mesh and its materials are inputs too, known once the scene is read.
+    let copy = dir.join("scene");
+    std::fs::create_dir(&copy).unwrap();
+    for name in ["cornell.toml", "cornell.obj", "cornell.mtl"] {
+        std::fs::copy(common::project(&format!("scenes/cornell/{name}")), copy.join(name)).unwrap();
+    }
+    let mtl = std::fs::read(copy.join("cornell.mtl")).unwrap();
+    let (small, toml) = (["--width", "8", "--height", "8", "--sensor-size", "8"], copy.join("cornell.toml"));
+    for input in ["cornell.mtl", "cornell.obj"] {
+        let mut args = vec!["render", path(&toml), "-o", path(&exr), "--no-png", "--stats-json"];
+        let stats = dir.join("sub/../scene").join(input);
+        args.push(path(&stats));
+        args.extend_from_slice(&small);
+        common::expect_failure(&args, "would overwrite the input");
+    }
+    assert_eq!(std::fs::read(copy.join("cornell.mtl")).unwrap(), mtl, "the MTL is untouched");
+    assert!(!exr.exists());
     // bench's reports (checked before the scene is even read), and compare's --json against its inputs.
     let json = dir.join("r.json");
     let (json, csv) = (path(&json), path(&dir.join("sub/../r.json")).to_owned());

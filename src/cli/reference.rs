@@ -35,6 +35,7 @@ pub struct ReferenceArgs {
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     super::check_exr_outputs(&args.output, args.image.write_png(), &[], &[&args.scene])?;
     let scene = Scene::load(&args.scene)?;
+    super::check_exr_outputs(&args.output, args.image.write_png(), &[], &scene.input_paths())?;
     super::print_warnings(&scene);
     let params = EstimatorParams::resolve(&scene.render, &args.estimator.overrides())?;
     let size = args.image.size(&scene)?;

@@ -61,6 +61,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let stats_json: Vec<_> = args.stats_json.iter().map(|p| ("--stats-json", p.as_path())).collect();
     super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &[&args.scene])?;
     let scene = Scene::load(&args.scene)?;
+    // Again with the mesh and its materials, known now.
+    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &scene.input_paths())?;
     super::print_warnings(&scene);
     let params = RenderParams::resolve(&scene.render, &args.overrides())?;
     let size = args.image.size(&scene)?;

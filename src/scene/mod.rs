@@ -166,9 +166,17 @@ pub struct Scene {
     pub render: RenderDefaults,
     /// Warnings met while loading (undefined materials, dropped triangles, no emitter, `Kd` above 1, …).
     pub warnings: Vec<String>,
+    /// The files it was read from: the scene file, the mesh, its material libraries (none when built in).
+    /// Outputs must not overwrite them.
+    pub inputs: Vec<PathBuf>,
 }
 
 impl Scene {
+    /// [`Scene::inputs`] as paths.
+    pub fn input_paths(&self) -> Vec<&Path> {
+        self.inputs.iter().map(PathBuf::as_path).collect()
+    }
+
     /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line.
     pub fn load(path: &Path) -> Result<Self> {
         let file = file::SceneFile::read(path)?;
@@ -190,6 +198,8 @@ impl Scene {
         let mesh =
             Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings })
+        let mut inputs = vec![path.to_owned()];
+        inputs.extend(obj.files);
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings, inputs })
     }
 }

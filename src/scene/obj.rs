@@ -55,6 +55,8 @@ pub struct ObjData {
     pub groups: Vec<ObjGroup>,
     pub materials: Vec<Material>,
     pub warnings: Vec<String>,
+    /// The files read: the OBJ, then each material library.
+    pub files: Vec<PathBuf>,
 }
 
 /// OBJ statements that are valid but carry nothing this renderer uses (free-form geometry, display hints).
@@ -97,10 +99,11 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
     let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);
     let mtl_warnings = RefCell::new(Vec::new());
+    let files = RefCell::new(vec![path.to_owned()]);
     let options =
         tobj::LoadOptions { triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
     let loaded = tobj::load_obj_buf(&mut checked.text.as_bytes(), &options, |mtllib| {
-        match load_mtl(&dir, mtllib, &mut mtl_warnings.borrow_mut()) {
+        match load_mtl(&dir, mtllib, &mut mtl_warnings.borrow_mut(), &mut files.borrow_mut()) {
             Ok(result) => result,
             Err(e) => {
                 mtl_error.borrow_mut().get_or_insert(e);
@@ -147,7 +150,7 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             ObjGroup { name: model.name, material: model.mesh.material_id.unwrap_or(default_material), triangles }
         })
         .collect();
-    Ok(ObjData { groups, materials, warnings })
+    Ok(ObjData { groups, materials, warnings, files: files.into_inner() })
 }
 
 /// A text file without its UTF-8 byte order mark. Only a regular file is read: a FIFO or a device named as a
@@ -343,7 +346,12 @@ fn check_face_vertex(vertex: &str, counts: &[usize; 3]) -> Result<(), String> {
 }
 
 /// Loads an MTL named by `mtllib`: beside the OBJ as written, else by file name beside the OBJ.
-fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<tobj::MTLLoadResult, LoadError> {
+fn load_mtl(
+    dir: &Path,
+    requested: &Path,
+    warnings: &mut Vec<String>,
+    files: &mut Vec<PathBuf>,
+) -> Result<tobj::MTLLoadResult, LoadError> {
     let as_written = dir.join(requested);
     let by_name = requested.file_name().map(|name| dir.join(name));
     let path = if as_written.is_file() {
@@ -366,6 +374,7 @@ fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<
         return Ok(Err(tobj::LoadError::OpenFileFailed));
     };
     let text = read_text(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
+    files.push(path.clone());
     let checked = check_mtl(&path, &text)?;
     // `check_mtl` rejects everything tobj would; a parse error here must still not pass for "no materials".
     let materials =
