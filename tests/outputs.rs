@@ -2,6 +2,8 @@
 //! file; a failed run leaves none of its outputs; a full disk is said once; the same command writes the
 //! same bytes.
 
+#![cfg(unix)]
+
 mod common;
 
 use std::os::unix::fs::FileTypeExt as _;

@@ -147,20 +147,24 @@ pub fn resolve(path: &Path) -> Result<PathBuf> {
 
 /// What a file that is not a regular file is, in words.
 fn special_kind(kind: std::fs::FileType) -> Option<&'static str> {
-    use std::os::unix::fs::FileTypeExt as _;
     if kind.is_file() {
-        None
-    } else if kind.is_dir() {
-        Some("a directory")
-    } else if kind.is_fifo() {
-        Some("a named pipe (FIFO)")
-    } else if kind.is_socket() {
-        Some("a socket")
-    } else if kind.is_char_device() || kind.is_block_device() {
-        Some("a device")
-    } else {
-        Some("not a regular file")
+        return None;
     }
+    if kind.is_dir() {
+        return Some("a directory");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt as _;
+        if kind.is_fifo() {
+            return Some("a named pipe (FIFO)");
+        } else if kind.is_socket() {
+            return Some("a socket");
+        } else if kind.is_char_device() || kind.is_block_device() {
+            return Some("a device");
+        }
+    }
+    Some("not a regular file")
 }
 
 /// Fails early, before any long computation, if `path` cannot be written: its directory is missing or not
@@ -288,6 +292,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(unix)]
     fn outputs_never_alias_each_other_or_an_input() {
         let dir = scratch("alias");
         std::fs::create_dir(dir.join("sub")).unwrap();
@@ -319,6 +324,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(unix)]
     fn special_files_are_refused_and_links_written_through() {
         let dir = scratch("special");
         let fifo = dir.join("pipe.json");
