@@ -11,9 +11,10 @@
 //! - [`reference`](mod@reference): the CPU ray-casting reference of the same estimator; [`light`]: closed forms it is
 //!   tested against (exact polygon irradiance);
 //! - [`params`]: the algorithm's parameters, defaults and checks;
-//! - [`output`]: EXR and PNG writing, always atomic.
+//! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user.
 
 pub mod bench;
+pub mod errors;
 pub mod gbuffer;
 pub mod gpu_scene;
 pub mod gpu_types;

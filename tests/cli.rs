@@ -165,3 +165,44 @@ fn unwritable_outputs_are_refused_before_any_work() {
     common::expect_failure(&["reference", "no-such-scene.toml", "-o", missing], "does not exist");
     common::expect_failure(&["render", "no-such-scene.toml", "-o", exr], "no-such-scene.toml");
 }
+
+/// Runs `sensorlight args` with its standard output a pipe whose reader has already gone, as in
+/// `sensorlight devices | head -0`: the first line it prints meets a closed pipe.
+fn with_closed_stdout(args: &[&str]) -> std::process::Output {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let child = common::command().args(args).stdout(writer).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    child.wait_with_output().unwrap()
+}
+
+/// A reader that stops reading is no failure: every command that prints to stdout ends quietly, exit 0,
+/// and still writes its files.
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    let dir = common::scratch("closed_stdout");
+    let image = dir.join("a.exr");
+    exr::ExrImage::new(2, 1).rgb("", &[glam::Vec4::ONE, glam::Vec4::splat(2.0)]).write(&image).unwrap();
+    let (image, json) = (image.to_str().unwrap(), dir.join("bench.json"));
+    let bench = ["bench", "--sizes", "8", "--sensors", "2", "--repeat", "1", "--strategies", "per-sensor"];
+    let mut bench = bench.to_vec();
+    bench.extend(["--json", json.to_str().unwrap()]);
+    for args in [&["devices"][..], &["compare", image, image], &bench] {
+        let run = with_closed_stdout(args);
+        let stderr = common::stderr(&run);
+        assert_eq!(run.status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked") && !stderr.contains("error"), "{args:?}: {stderr}");
+    }
+    assert!(json.exists(), "bench wrote its report before the table");
+}
+
+/// Standard output on a full disk (`> /dev/full`) is an error like any other: exit 1, said once.
+#[test]
+fn a_full_stdout_is_an_error_said_once() {
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let run = common::command().arg("devices").stdout(full).output().unwrap();
+    let stderr = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cannot write to standard output"), "{stderr}");
+    assert_eq!(stderr.matches("No space left on device").count(), 1, "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -10,6 +10,7 @@ const RULES: &[(&str, &[&str])] = &[
     ("vk", &[]),
     ("scene", &[]),
     ("output", &[]),
+    ("errors", &[]),
     ("gpu_types", &[]),
     ("shaders", &[]),
     // CPU algorithms.

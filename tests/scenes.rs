@@ -201,3 +201,132 @@ fn comments_and_ignored_statements_are_tolerated() {
     assert_eq!(scene.mesh.triangles.len(), 2);
     assert!(scene.warnings.iter().any(|w| w.contains("cstype")), "{:?}", scene.warnings);
 }
+
+/// Loads `obj` (and `extra` files beside it) as the mesh of a default scene.
+fn load_with(name: &str, obj: &str, extra: &[(&str, &str)]) -> Scene {
+    let dir = common::scratch(name);
+    for (file, contents) in extra {
+        std::fs::write(dir.join(file), contents).unwrap();
+    }
+    Scene::load(&write_scene(&dir, Some(obj), None)).unwrap_or_else(|e| panic!("{name}: {e:#}"))
+}
+
+fn kd_of_first_triangle(scene: &Scene) -> Vec3 {
+    scene.mesh.material_of(scene.mesh.triangles[0].surface).kd
+}
+
+/// Files saved by Windows editors start with a UTF-8 byte order mark; it is not part of the first statement.
+#[test]
+fn a_byte_order_mark_is_accepted_in_obj_and_mtl() {
+    let obj = format!("\u{feff}mtllib m.mtl\nusemtl a\n{QUAD}");
+    let scene = load_with("bom", &obj, &[("m.mtl", "\u{feff}newmtl a\nKd 0.2 0.3 0.4\nKe 1 1 1\n")]);
+    assert_eq!(kd_of_first_triangle(&scene), Vec3::new(0.2, 0.3, 0.4), "{:?}", scene.warnings);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
+/// Any whitespace separates a statement from its arguments, tabs included.
+#[test]
+fn tabs_separate_statements_from_names() {
+    let obj = format!("mtllib\tm.mtl\nusemtl \t a\ng\twall\n{}", QUAD.replace(' ', "\t"));
+    let scene = load_with("tabs", &obj, &[("m.mtl", "newmtl\ta\nKd\t0.2 \t0.3\t0.4\nKe\t1\t1\t1\n")]);
+    assert_eq!(kd_of_first_triangle(&scene), Vec3::new(0.2, 0.3, 0.4), "{:?}", scene.warnings);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.mesh.surfaces[0].name, "wall/a");
+}
+
+/// Coordinates of 1e30 are finite, but the triangle's area is not: that is said, not "degenerate".
+#[test]
+fn a_triangle_whose_area_overflows_f32_is_an_error() {
+    let obj = "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n";
+    rejects("area_overflow", Some(obj), None, &["mesh.obj", "too large for 32-bit floats", "area"]);
+    let dir = common::scratch("area_overflow_message");
+    let message = format!("{:#}", Scene::load(&write_scene(&dir, Some(obj), None)).unwrap_err());
+    assert!(!message.contains("degenerate"), "{message}");
+}
+
+/// A polyline of three points is a line, not a triangle; a point is not geometry either.
+#[test]
+fn lines_and_points_are_not_triangles() {
+    let scene = load_with("polyline", &format!("{QUAD}v 0 0 1\nl 1 2 5\np 1 2 5\nl 2 5\n"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2, "only the quad");
+}
+
+/// `vt u` (v defaults to 0 in the OBJ format) is accepted; `vn` needs three values, said with the line.
+#[test]
+fn texture_coordinates_and_normals_take_their_arities() {
+    let scene = load_with("vt_one", &format!("vt 0.5\n{QUAD}"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2);
+    rejects("vn_two", Some(&format!("{QUAD}vn 0 1\n")), None, &["mesh.obj:6", "'vn' takes 3"]);
+    rejects("vt_four", Some(&format!("{QUAD}vt 0 1 0 1\n")), None, &["mesh.obj:6", "'vt' takes 1 to 3"]);
+}
+
+/// A weight w divides the coordinates: one that makes them overflow is refused with the line.
+#[test]
+fn a_vertex_weight_that_overflows_is_an_error() {
+    rejects("tiny_w", Some(&format!("{QUAD}v 1 1 1 1e-40\n")), None, &["mesh.obj:6", "not finite"]);
+}
+
+#[test]
+fn a_scene_without_emitters_is_warned_about() {
+    let scene = load_with("no_emitters", QUAD, &[]);
+    let warning = scene.warnings.iter().find(|w| w.contains("emits")).unwrap_or_else(|| panic!("{:?}", scene.warnings));
+    assert!(warning.contains("ε = 0"), "{warning}");
+    let lit =
+        load_with("emitters", &format!("mtllib m.mtl\nusemtl glow\n{QUAD}"), &[("m.mtl", "newmtl glow\nKe 1 1 1\n")]);
+    assert!(lit.warnings.is_empty(), "{:?}", lit.warnings);
+}
+
+#[test]
+fn an_albedo_above_one_is_warned_about_by_name() {
+    let mtl = "newmtl hot\nKd 1.2 0.5 0.5\nnewmtl fine\nKd 1 1 1\nKe 1 1 1\nnewmtl unused\nKd 3 3 3\n";
+    let obj = format!("mtllib m.mtl\nusemtl hot\n{QUAD}usemtl fine\nv 0 0 1\nf 1 2 5\n");
+    let scene = load_with("kd_above_one", &obj, &[("m.mtl", mtl)]);
+    let gains: Vec<&String> = scene.warnings.iter().filter(|w| w.contains("Kd")).collect();
+    assert_eq!(gains.len(), 1, "only 'hot' (used, above 1): {:?}", scene.warnings);
+    assert!(gains[0].contains("'hot'") && gains[0].contains("1.2") && gains[0].contains("energy"), "{}", gains[0]);
+}
+
+/// A mesh that is a device or a directory is refused at once: reading /dev/zero would never end.
+#[test]
+fn a_mesh_that_is_not_a_regular_file_is_refused() {
+    let body = format!("mesh = \"/dev/zero\"\n{CAMERA}");
+    rejects("mesh_device", None, Some(&body), &["/dev/zero", "not a regular file"]);
+    let body = format!("mesh = \".\"\n{CAMERA}");
+    rejects("mesh_directory", None, Some(&body), &["cannot read mesh: it is a directory"]);
+}
+
+/// Found by the fuzz harness: the index -9223372036854775808 (i64::MIN) has no positive counterpart in an
+/// i64; negating it wrapped around and passed the check, and tobj then failed without a line.
+#[test]
+fn the_most_negative_face_index_names_its_line() {
+    let obj = format!("{QUAD}f 1 -9223372036854775808 2\n");
+    rejects("index_min", Some(&obj), None, &["mesh.obj:6", "index -9223372036854775808"]);
+}
+
+/// Vectors that are finite but whose length overflows f32 were "coinciding" or "parallel"; say what it is,
+/// and accept a long `up`, whose length does not matter.
+#[test]
+fn huge_camera_vectors_are_told_apart() {
+    let camera = |eye: &str, target: &str, up: &str| {
+        format!(
+            "mesh = \"mesh.obj\"\n[camera]\neye = {eye}\ntarget = {target}\nup = {up}\nvfov_deg = 40\n[image]\nwidth = 8\nheight = 8\n"
+        )
+    };
+    let far = camera("[3e38, 0, 5]", "[-3e38, 0, 0]", "[0, 1, 0]");
+    rejects("camera_far", Some(QUAD), Some(&far), &["scene.toml: [camera]", "too far apart for 32-bit floats"]);
+    let dir = common::scratch("camera_long_up");
+    let scene = Scene::load(&write_scene(&dir, Some(QUAD), Some(&camera("[0, 0, 5]", "[0, 0, 0]", "[0, 3e38, 0]"))));
+    let scene = scene.unwrap_or_else(|e| panic!("{e:#}"));
+    assert!((scene.camera.up - Vec3::Y).length() < 1e-6, "{:?}", scene.camera);
+    let dir = common::scratch("camera_long_view");
+    let scene = Scene::load(&write_scene(&dir, Some(QUAD), Some(&camera("[0, 0, 2e38]", "[0, 0, 0]", "[0, 1, 0]"))));
+    assert!((scene.unwrap_or_else(|e| panic!("{e:#}")).camera.forward + Vec3::Z).length() < 1e-6);
+}
+
+/// Found by the fuzz harness: vertex colours (`v x y z r g b`) on some vertices and not on others made tobj
+/// fail without a line when a face used an uncoloured one. This renderer does not use vertex colours.
+#[test]
+fn vertex_colours_on_some_vertices_are_ignored() {
+    let scene = load_with("vertex_colours", &format!("v 0 0 0 1 0 0\n{QUAD}"), &[]);
+    assert_eq!(scene.mesh.triangles.len(), 2);
+}

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Result, ensure};
 use clap::Args;
 use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport};
+use sensorlight::outln;
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
 use sensorlight::params::RenderParams;
@@ -53,9 +54,10 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(plot) = &args.plot {
         atomic::check_extension(plot, "svg")?;
     }
-    for path in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
-        atomic::check_writable(path)?;
-    }
+    let outputs = [("--json", &args.json), ("--csv", &args.csv), ("--plot", &args.plot)];
+    let outputs: Vec<(&str, &std::path::Path)> =
+        outputs.iter().filter_map(|(flag, path)| path.as_deref().map(|p| (*flag, p))).collect();
+    atomic::check_outputs(&outputs, &args.scene.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
     let strategies = if args.strategies.is_empty() { StrategyKind::ALL.to_vec() } else { args.strategies.clone() };
     let size = ImageSize { width: 128, height: 128 };
     let (scene, params) = match &args.scene {
@@ -81,36 +83,42 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             }
         })?;
         bar.finish_and_clear();
-        print_report(&report);
+        // The files first: a reader of the table that stops early (`| head`) does not lose them.
+        let mut files = atomic::Outputs::new();
         if let Some(path) = &args.json {
-            atomic::write_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
+            files.stage_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
         }
         if let Some(path) = &args.csv {
-            atomic::write_bytes(path, report.csv().as_bytes())?;
+            files.stage_bytes(path, report.csv().as_bytes())?;
         }
         if let Some(path) = &args.plot {
-            plot(&report).write_svg(path)?;
+            files.stage_bytes(path, plot(&report).svg()?.as_bytes())?;
         }
-        Ok(())
+        files.commit()?;
+        print_report(&report)
     })
 }
 
-fn print_report(r: &BenchReport) {
-    println!("device: {} ({})", r.device, r.driver);
-    println!(
+fn print_report(r: &BenchReport) -> Result<()> {
+    outln!("device: {} ({})", r.device, r.driver)?;
+    outln!(
         "scene: {} ({} triangles); {} sensors, {} per run, {} timed runs each, interleaved; medians [min–max]",
-        r.scene, r.triangles, r.sensor, r.sensors, r.repeat
-    );
+        r.scene,
+        r.triangles,
+        r.sensor,
+        r.sensors,
+        r.repeat
+    )?;
     for (kind, why) in &r.skipped {
-        println!("not measured: {kind}: {why}");
+        outln!("not measured: {kind}: {why}")?;
     }
-    println!("\n| rd | strategy | sensors/s [min–max] | Mtexel/s | vs per-sensor | vs raw fill |");
-    println!("|---:|---|---:|---:|---:|---:|");
+    outln!("\n| rd | strategy | sensors/s [min–max] | Mtexel/s | vs per-sensor | vs raw fill |")?;
+    outln!("|---:|---|---:|---:|---:|---:|")?;
     for m in &r.measurements {
         let n = r.sensors as f64;
         let fastest = m.seconds.iter().copied().fold(f64::INFINITY, f64::min);
         let slowest = m.seconds.iter().copied().fold(0.0, f64::max);
-        println!(
+        outln!(
             "| {} | {} | {:.0} [{:.0}–{:.0}] | {:.1} | {} | {:.0} % |",
             m.rd,
             m.strategy,
@@ -120,20 +128,21 @@ fn print_report(r: &BenchReport) {
             m.texels_per_second * 1e-6,
             m.vs_per_sensor.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
             100.0 * m.vs_fill
-        );
+        )?;
     }
-    println!("\n| rd | raw fill Mtexel/s | reduction alone, sensors/s | reduction share of the best | best |");
-    println!("|---:|---:|---:|---:|---|");
+    outln!("\n| rd | raw fill Mtexel/s | reduction alone, sensors/s | reduction share of the best | best |")?;
+    outln!("|---:|---:|---:|---:|---|")?;
     for s in &r.sizes {
-        println!(
+        outln!(
             "| {} | {:.1} | {:.0} | {:.0} % | {} |",
             s.rd,
             s.fill_texels_per_second * 1e-6,
             1.0 / s.reduction_seconds_per_sensor,
             100.0 * s.reduction_share_of_best,
             s.best
-        );
+        )?;
     }
+    Ok(())
 }
 
 fn plot(r: &BenchReport) -> Chart<'static> {

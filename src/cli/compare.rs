@@ -5,9 +5,13 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use sensorlight::output::compare::compare_files;
+use sensorlight::outln;
+use sensorlight::output::{atomic, compare::compare_files};
 
 #[derive(Args)]
+#[command(after_help = "The headline is the per-pixel relative RMSE of luminance over the lit pixels of the \
+    reference (luminance above 1 % of its mean), silhouettes masked where a surface_id channel exists. Images \
+    holding NaN or infinite values, or of different sizes, are errors.")]
 pub struct CompareArgs {
     /// The image to judge (EXR).
     image: PathBuf,
@@ -16,13 +20,21 @@ pub struct CompareArgs {
     /// Channel group to compare: empty for the main R, G, B, or e.g. `radiance`
     #[arg(long, default_value = "")]
     layer: String,
+    /// Also write the figures as JSON to this file
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 pub fn run(args: CompareArgs) -> Result<ExitCode> {
+    if let Some(json) = &args.json {
+        atomic::check_outputs(&[("--json", json)], &[&args.image, &args.reference])?;
+    }
     let a = compare_files(&args.image, &args.reference, &args.layer)?;
-    println!(
-        "relative RMSE {:.4}, relative mean absolute error {:.4}, relative bias {:+.4}, over {} pixels",
-        a.relative_rmse, a.relative_mean_abs, a.relative_bias, a.pixels
-    );
+    if let Some(json) = &args.json {
+        atomic::write_bytes(json, &a.to_json(&args.image, &args.reference, &args.layer)?)?;
+    }
+    for line in a.summary() {
+        outln!("{line}")?;
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -78,14 +78,15 @@ fn attribute(params: &RenderParams, error: anyhow::Error) -> anyhow::Error {
 }
 
 /// Checks, before any work, that an EXR output and what is written beside it (the PNG preview unless
-/// `png` is false, `extra` files) can be written.
-fn check_exr_outputs(exr: &Path, png: bool, extra: &[&Path]) -> Result<()> {
+/// `png` is false, `extra` files with the flag that names each) can be written, and that none of them is
+/// another or one of `inputs`.
+fn check_exr_outputs(exr: &Path, png: bool, extra: &[(&str, &Path)], inputs: &[&Path]) -> Result<()> {
     sensorlight::output::atomic::check_extension(exr, "exr")?;
     let png = png.then(|| exr.with_extension("png"));
-    for path in [Some(exr), png.as_deref()].into_iter().flatten().chain(extra.iter().copied()) {
-        sensorlight::output::atomic::check_writable(path)?;
-    }
-    Ok(())
+    let mut outputs = vec![("-o", exr)];
+    outputs.extend(png.as_deref().map(|p| ("the PNG preview", p)));
+    outputs.extend_from_slice(extra);
+    sensorlight::output::atomic::check_outputs(&outputs, inputs)
 }
 
 /// Exit code when the validation layer reported anything.

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
-use sensorlight::output::{exr::ExrImage, png};
+use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
 
@@ -34,9 +34,10 @@ pub struct ReferenceArgs {
 }
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
-    super::check_exr_outputs(&args.output, args.image.write_png(), &[])?;
+    super::check_exr_outputs(&args.output, args.image.write_png(), &[], &[&args.scene])?;
     let flags = Overrides { exposure: args.image.exposure, ..args.estimator.overrides() };
     let (scene, resolved) = super::load_scene(&args.scene, &flags)?;
+    super::check_exr_outputs(&args.output, args.image.write_png(), &[], &scene.input_paths())?;
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;
     let integrator = Integrator::new(&scene, params, args.samples, args.seed)?;
@@ -66,15 +67,19 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         rayon::current_num_threads(),
         100.0 * result.relative_noise()
     );
+    // Both files or neither: staged, then renamed together.
+    let mut files = atomic::Outputs::new();
     ExrImage::new(size.width, size.height)
         .rgb("", &result.image)
         .rgb("radiance", &result.radiance)
         .rgb("std_error", &result.std_error)
-        .write(&args.output)?;
-    eprintln!("wrote {}", args.output.display());
-    if args.image.write_png() {
-        let path = args.output.with_extension("png");
-        png::write(&path, size.width, size.height, &result.image, resolved.exposure)?;
+        .stage(&mut files, &args.output)?;
+    let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
+    if let Some(path) = &png_path {
+        png::stage(&mut files, path, (size.width, size.height), &result.image, resolved.exposure)?;
+    }
+    files.commit()?;
+    for path in [Some(&args.output), png_path.as_ref()].into_iter().flatten() {
         eprintln!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)

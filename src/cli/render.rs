@@ -31,7 +31,7 @@ pub struct RenderArgs {
     /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), surface_id
     #[arg(long)]
     aovs: bool,
-    /// Write the render statistics as JSON to this file
+    /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
     #[arg(long)]
     stats_json: Option<PathBuf>,
     /// Memory for one batch of sensor maps, MiB [default: the batches in flight share 1/8 of the device's
@@ -61,9 +61,11 @@ impl RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
-    let stats_json: Vec<&std::path::Path> = args.stats_json.iter().map(PathBuf::as_path).collect();
-    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json)?;
+    let stats_json: Vec<_> = args.stats_json.iter().map(|p| ("--stats-json", p.as_path())).collect();
+    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &[&args.scene])?;
     let (scene, params) = super::load_scene(&args.scene, &args.overrides())?;
+    // Again with the mesh and its materials, known now.
+    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &scene.input_paths())?;
     let size = args.image.size(&scene)?;
     super::with_device(args.device, |device| {
         let mut cache = Cache::open_default();
@@ -136,16 +138,19 @@ fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -
             .scalar("sensor_mask", mask.collect())
             .scalar("surface_id", out.gbuffer.surface.iter().map(|&s| s as f32).collect());
     }
-    exr.write(&args.output)?;
-    eprintln!("wrote {}", args.output.display());
-    if args.image.write_png() {
-        let path = args.output.with_extension("png");
-        png::write(&path, size.width, size.height, &out.image, params.exposure)?;
-        eprintln!("wrote {}", path.display());
+    // Every output or none: all are staged, then renamed together.
+    let mut files = atomic::Outputs::new();
+    exr.stage(&mut files, &args.output)?;
+    let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
+    if let Some(path) = &png_path {
+        png::stage(&mut files, path, (size.width, size.height), &out.image, params.exposure)?;
     }
     if let Some(path) = &args.stats_json {
         let json = serde_json::to_string_pretty(&out.stats).context("stats to JSON")?;
-        atomic::write_bytes(path, json.as_bytes())?;
+        files.stage_bytes(path, json.as_bytes())?;
+    }
+    files.commit()?;
+    for path in [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref()].into_iter().flatten() {
         eprintln!("wrote {}", path.display());
     }
     Ok(())

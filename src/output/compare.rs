@@ -1,73 +1,328 @@
 //! Image agreement: how far one radiance image is from another (e.g. a render from its CPU reference).
+//!
+//! The headline is the **per-pixel relative RMSE on lit pixels**, on luminance:
+//! `sqrt(mean over lit pixels of ((Ya − Yb) / Yb)²)`, `Y = 0.2126 R + 0.7152 G + 0.0722 B` (Rec. 709, the
+//! renderer's linear RGB). Every lit pixel weighs the same, so a dim wall counts as much as the light
+//! source. Luminance rather than each channel: a saturated pixel (a red wall's blue channel) would otherwise
+//! divide by a near-zero reference.
+//!
+//! - **Lit** means the reference's luminance exceeds [`LIT_FRACTION`] (1 %) of its mean luminance over the
+//!   compared pixels; darker pixels would divide by noise. The threshold is reported.
+//! - **Silhouettes** are masked where either image has a `surface_id` channel: a pixel whose 3 × 3
+//!   neighbourhood holds another id there. Renderers filter pixels differently along an edge, which is not
+//!   what a comparison of lighting should measure. The masked pixels are counted and reported.
+//! - Also reported: the mean absolute relative error (per pixel, luminance), the bias
+//!   `(ΣYa − ΣYb) / ΣYb`, and the former headline, the L2 ratio `sqrt(Σ|a − b|² / Σ|b|²)` over the RGB of
+//!   the lit pixels, which the brightest pixels dominate.
+//! - An image holding NaN or infinite values, images of different sizes and a reference with no lit pixel
+//!   are errors, with the counts of NaN and infinite pixels of each image.
 
 use std::path::Path;
 
-use anyhow::{Result, ensure};
+use anyhow::{Context as _, Result, bail, ensure};
 
 use super::exr;
 
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Agreement {
-    /// sqrt(Σ|a − b|² / Σ|b|²) over the pixels compared (rgb).
-    pub relative_rmse: f64,
-    /// Σ|a − b| / Σ|b|: the mean absolute error relative to the mean.
-    pub relative_mean_abs: f64,
-    /// (Σa − Σb) / Σb: the overall bias.
-    pub relative_bias: f64,
-    pub pixels: usize,
+/// A pixel is lit where the reference's luminance exceeds this fraction of its mean luminance.
+pub const LIT_FRACTION: f64 = 0.01;
+/// Rec. 709 luminance weights of linear R, G, B.
+pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+/// One image's channels as compared: R, G, B of a layer and the `surface_id` AOV where it has one.
+#[derive(Clone, Debug)]
+pub struct Picture {
+    /// For messages: usually the file name.
+    pub name: String,
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<[f32; 3]>,
+    pub surface_id: Option<Vec<f32>>,
 }
 
-/// Compares rgb images `a` against `b` (the reference) over pixels where `b` is not black.
-pub fn agreement(a: &[[f32; 3]], b: &[[f32; 3]]) -> Agreement {
-    assert_eq!(a.len(), b.len());
-    let (mut err2, mut ref2, mut abs, mut refabs, mut sum_a, mut sum_b, mut n) = (0.0f64, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
-    for (pa, pb) in a.iter().zip(b) {
-        if pb.iter().all(|&v| v == 0.0) {
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Agreement {
+    /// The headline: sqrt(mean over lit pixels of ((Ya − Yb) / Yb)²).
+    pub relative_rmse: f64,
+    /// Mean over lit pixels of |Ya − Yb| / Yb.
+    pub mean_abs_relative_error: f64,
+    /// (ΣYa − ΣYb) / ΣYb over lit pixels.
+    pub relative_bias: f64,
+    /// sqrt(Σ|a − b|² / Σ|b|²) over the RGB of lit pixels.
+    pub l2_ratio: f64,
+    /// All pixels of the image.
+    pub pixels: usize,
+    /// Pixels compared: lit and not masked.
+    pub lit_pixels: usize,
+    /// Pixels left out as silhouettes (`surface_id` changes in their 3 × 3 neighbourhood).
+    pub masked_pixels: usize,
+    /// Whether a `surface_id` channel was found (in either image) to mask silhouettes with.
+    pub surface_ids: bool,
+    /// Reference luminance above which a pixel is lit: [`LIT_FRACTION`] of its mean over unmasked pixels.
+    pub lit_threshold: f64,
+}
+
+impl Picture {
+    /// Reads channel group `layer` (`""` for the main R, G, B) of an EXR, and its `surface_id` if present.
+    pub fn read(path: &Path, layer: &str) -> Result<Self> {
+        let (width, height, mut channels) = exr::read_all(path)?;
+        let mut take = |name: &str| channels.iter_mut().find(|(n, _)| n == name).map(|(_, v)| std::mem::take(v));
+        let prefix = if layer.is_empty() { String::new() } else { format!("{layer}.") };
+        let mut rgb = Vec::new();
+        for c in ["R", "G", "B"] {
+            let name = format!("{prefix}{c}");
+            rgb.push(take(&name).with_context(|| format!("{}: no channel {name}", path.display()))?);
+        }
+        let surface_id = take("surface_id");
+        let rgb = (0..width * height).map(|i| [rgb[0][i], rgb[1][i], rgb[2][i]]).collect();
+        Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id })
+    }
+
+    /// NaN and infinite pixels (any channel), and the first one's (x, y).
+    pub fn non_finite(&self) -> NonFinite {
+        let mut count = NonFinite::default();
+        for (i, p) in self.rgb.iter().enumerate() {
+            let nan = p.iter().any(|v| v.is_nan());
+            let inf = !nan && p.iter().any(|v| v.is_infinite());
+            count.nan += nan as usize;
+            count.infinite += inf as usize;
+            if (nan || inf) && count.first.is_none() {
+                count.first = Some((i % self.width, i / self.width));
+            }
+        }
+        count
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NonFinite {
+    pub nan: usize,
+    pub infinite: usize,
+    pub first: Option<(usize, usize)>,
+}
+
+impl std::fmt::Display for NonFinite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.first {
+            None => write!(f, "no NaN or infinite pixel"),
+            Some((x, y)) => {
+                write!(f, "{} NaN and {} infinite pixel(s), the first at x {x}, y {y}", self.nan, self.infinite)
+            }
+        }
+    }
+}
+
+fn luminance(p: &[f32; 3]) -> f64 {
+    (0..3).map(|c| LUMINANCE[c] * p[c] as f64).sum()
+}
+
+/// Pixels whose 3 × 3 neighbourhood (within the image) holds another id.
+pub fn silhouettes(width: usize, height: usize, ids: &[f32]) -> Vec<bool> {
+    let mut mask = vec![false; width * height];
+    for y in 0..height {
+        for x in 0..width {
+            let id = ids[y * width + x];
+            let ys = y.saturating_sub(1)..(y + 2).min(height);
+            mask[y * width + x] =
+                ys.into_iter().any(|v| (x.saturating_sub(1)..(x + 2).min(width)).any(|u| ids[v * width + u] != id));
+        }
+    }
+    mask
+}
+
+/// Compares `a` against the reference `b` (see the module documentation).
+pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
+    ensure!(
+        (a.width, a.height) == (b.width, b.height),
+        "{} is {}x{} but {} is {}x{}; only images of one size can be compared",
+        a.name,
+        a.width,
+        a.height,
+        b.name,
+        b.width,
+        b.height
+    );
+    let (na, nb) = (a.non_finite(), b.non_finite());
+    if na.first.is_some() || nb.first.is_some() {
+        bail!("cannot compare images holding NaN or infinite values: {}: {na}; {}: {nb}", a.name, b.name);
+    }
+    let n = a.rgb.len();
+    let mut masked = vec![false; n];
+    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten() {
+        for (m, s) in masked.iter_mut().zip(silhouettes(a.width, a.height, ids)) {
+            *m |= s;
+        }
+    }
+    let unmasked = masked.iter().filter(|&&m| !m).count();
+    let mean = b.rgb.iter().zip(&masked).filter(|(_, m)| !**m).map(|(p, _)| luminance(p)).sum::<f64>()
+        / unmasked.max(1) as f64;
+    let threshold = LIT_FRACTION * mean;
+    let (mut rel2, mut rel_abs, mut sum_a, mut sum_b, mut err2, mut ref2, mut lit) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    for i in (0..n).filter(|&i| !masked[i]) {
+        let (ya, yb) = (luminance(&a.rgb[i]), luminance(&b.rgb[i]));
+        if yb <= threshold || yb <= 0.0 {
             continue;
         }
-        n += 1;
+        lit += 1;
+        let relative = (ya - yb) / yb;
+        rel2 += relative * relative;
+        rel_abs += relative.abs();
+        sum_a += ya;
+        sum_b += yb;
         for c in 0..3 {
-            let (x, y) = (pa[c] as f64, pb[c] as f64);
+            let (x, y) = (a.rgb[i][c] as f64, b.rgb[i][c] as f64);
             err2 += (x - y) * (x - y);
             ref2 += y * y;
-            abs += (x - y).abs();
-            refabs += y.abs();
-            sum_a += x;
-            sum_b += y;
         }
     }
-    let ratio = |num: f64, den: f64| if den > 0.0 { num / den } else { 0.0 };
-    Agreement {
-        relative_rmse: ratio(err2, ref2).sqrt(),
-        relative_mean_abs: ratio(abs, refabs),
-        relative_bias: ratio(sum_a - sum_b, sum_b),
-        pixels: n,
+    if lit == 0 {
+        bail!(
+            "{} has no lit pixel to compare against ({} of {} pixels masked as silhouettes, mean luminance {mean})",
+            b.name,
+            n - unmasked,
+            n
+        );
     }
+    Ok(Agreement {
+        relative_rmse: (rel2 / lit as f64).sqrt(),
+        mean_abs_relative_error: rel_abs / lit as f64,
+        relative_bias: (sum_a - sum_b) / sum_b,
+        l2_ratio: (err2 / ref2).sqrt(),
+        pixels: n,
+        lit_pixels: lit,
+        masked_pixels: n - unmasked,
+        surface_ids: a.surface_id.is_some() || b.surface_id.is_some(),
+        lit_threshold: threshold,
+    })
 }
 
 /// Reads channel group `layer` (`""` for the main R, G, B) of two EXR files and compares them.
 pub fn compare_files(a: &Path, b: &Path, layer: &str) -> Result<Agreement> {
-    let names: Vec<String> =
-        ["R", "G", "B"].iter().map(|c| if layer.is_empty() { c.to_string() } else { format!("{layer}.{c}") }).collect();
-    let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    let (wa, ha, ca) = exr::read_channels(a, &names)?;
-    let (wb, hb, cb) = exr::read_channels(b, &names)?;
-    ensure!((wa, ha) == (wb, hb), "{} is {wa}x{ha} but {} is {wb}x{hb}", a.display(), b.display());
-    let rgb = |c: &[Vec<f32>]| (0..wa * ha).map(|i| [c[0][i], c[1][i], c[2][i]]).collect::<Vec<_>>();
-    Ok(agreement(&rgb(&ca), &rgb(&cb)))
+    let (a, b) = (Picture::read(a, layer)?, Picture::read(b, layer)?);
+    agreement(&a, &b)
+}
+
+impl Agreement {
+    /// The figures as a person reads them, one line each; the headline first.
+    pub fn summary(&self) -> Vec<String> {
+        let masked = if self.surface_ids {
+            format!("{} silhouette pixel(s) masked (surface_id)", self.masked_pixels)
+        } else {
+            "no surface_id channel, so no silhouette masked".to_owned()
+        };
+        vec![
+            format!(
+                "relative RMSE {:.4} (per pixel, luminance, over {} lit pixels of {})",
+                self.relative_rmse, self.lit_pixels, self.pixels
+            ),
+            format!(
+                "mean absolute relative error {:.4}, bias {:+.4}, L2 ratio {:.4} (sqrt(Σ|a−b|²/Σ|b|²), RGB)",
+                self.mean_abs_relative_error, self.relative_bias, self.l2_ratio
+            ),
+            format!(
+                "lit: reference luminance > {:.4e} ({} % of its mean); {masked}; no NaN or infinite pixel in either image",
+                self.lit_threshold,
+                LIT_FRACTION * 100.0
+            ),
+        ]
+    }
+
+    /// The figures as JSON, with the files they compare.
+    pub fn to_json(&self, image: &Path, reference: &Path, layer: &str) -> Result<Vec<u8>> {
+        #[derive(serde::Serialize)]
+        struct Report<'a> {
+            image: String,
+            reference: String,
+            layer: &'a str,
+            #[serde(flatten)]
+            agreement: &'a Agreement,
+            lit_fraction: f64,
+        }
+        let report = Report {
+            image: image.display().to_string(),
+            reference: reference.display().to_string(),
+            layer,
+            agreement: self,
+            lit_fraction: LIT_FRACTION,
+        };
+        let mut json = serde_json::to_vec_pretty(&report).context("comparison to JSON")?;
+        json.push(b'\n');
+        Ok(json)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn picture(name: &str, width: usize, rgb: Vec<[f32; 3]>, ids: Option<Vec<f32>>) -> Picture {
+        let height = rgb.len() / width;
+        Picture { name: name.into(), width, height, rgb, surface_id: ids }
+    }
+
+    /// A bright emitter and a dim wall: 10 % error on the wall, none on the emitter. The per-pixel headline
+    /// sees the wall's error on half the pixels; the old L2 ratio hardly sees it.
     #[test]
-    fn agreement_of_a_scaled_image() {
-        let b = vec![[1.0, 2.0, 3.0], [0.0; 3], [2.0, 2.0, 2.0]];
-        let a: Vec<[f32; 3]> = b.iter().map(|p| p.map(|v| v * 1.1)).collect();
-        let r = agreement(&a, &b);
-        assert_eq!(r.pixels, 2, "black reference pixels are skipped");
-        assert!((r.relative_rmse - 0.1).abs() < 1e-6 && (r.relative_bias - 0.1).abs() < 1e-6);
-        assert!((r.relative_mean_abs - 0.1).abs() < 1e-6);
+    fn the_headline_weighs_every_lit_pixel_alike() {
+        let mut b = vec![[100.0f32; 3]; 4];
+        b.extend(vec![[1.0f32; 3]; 4]);
+        let a: Vec<[f32; 3]> = b.iter().map(|p| if p[0] > 1.0 { *p } else { p.map(|v| v * 1.1) }).collect();
+        let r = agreement(&picture("a", 4, a, None), &picture("b", 4, b, None)).unwrap();
+        assert_eq!((r.pixels, r.lit_pixels, r.masked_pixels), (8, 8, 0));
+        let expected = (0.5f64 * 0.01).sqrt(); // sqrt(mean of four 0 and four 0.1²)
+        assert!((r.relative_rmse - expected).abs() < 1e-6, "{r:?}");
+        assert!((r.mean_abs_relative_error - 0.05).abs() < 1e-6, "{r:?}");
+        assert!(r.l2_ratio < 0.002, "the L2 ratio is dominated by the emitter: {r:?}");
+        let bias = (4.0 * 1.1 - 4.0) / (4.0 * 100.0 + 4.0);
+        assert!((r.relative_bias - bias).abs() < 1e-6, "{r:?}");
+    }
+
+    #[test]
+    fn dark_reference_pixels_are_not_lit() {
+        // Mean luminance ≈ 0.5: the threshold ≈ 0.005; 0.001 and 0 are left out, whatever `a` holds there.
+        let b = vec![[0.998f32; 3], [0.001; 3], [0.0; 3], [1.0; 3]];
+        let a = vec![[0.998f32; 3], [5.0; 3], [7.0; 3], [1.0; 3]];
+        let r = agreement(&picture("a", 2, a, None), &picture("b", 2, b, None)).unwrap();
+        assert_eq!(r.lit_pixels, 2);
+        assert!((r.lit_threshold - 0.005).abs() < 1e-5 && r.relative_rmse < 1e-6, "{r:?}");
+    }
+
+    #[test]
+    fn nan_and_inf_are_errors_counted_per_image() {
+        let b = vec![[f32::NAN; 3]; 4];
+        let a = vec![[1.0f32; 3], [f32::INFINITY, 0.0, 0.0], [1.0; 3], [1.0; 3]];
+        let message = agreement(&picture("a.exr", 2, a, None), &picture("b.exr", 2, b, None)).unwrap_err().to_string();
+        assert!(message.contains("a.exr: 0 NaN and 1 infinite pixel(s), the first at x 1, y 0"), "{message}");
+        assert!(message.contains("b.exr: 4 NaN and 0 infinite"), "{message}");
+        let fine = vec![[1.0f32; 3]; 4];
+        let message =
+            agreement(&picture("a.exr", 2, fine.clone(), None), &picture("b.exr", 4, fine, None)).unwrap_err();
+        assert!(message.to_string().contains("a.exr is 2x2 but b.exr is 4x1"), "{message}");
+    }
+
+    #[test]
+    fn an_all_black_reference_is_an_error() {
+        let black = vec![[0.0f32; 3]; 4];
+        let message = agreement(&picture("a", 2, black.clone(), None), &picture("b", 2, black, None)).unwrap_err();
+        assert!(message.to_string().contains("b has no lit pixel"), "{message}");
+    }
+
+    /// Two surfaces side by side, 4 × 3: the columns on either side of the edge are masked, and a large
+    /// error there does not count.
+    #[test]
+    fn silhouettes_are_masked_where_either_image_has_surface_ids() {
+        let ids: Vec<f32> = (0..12).map(|i| if i % 4 < 2 { 1.0 } else { 2.0 }).collect();
+        let mask = silhouettes(4, 3, &ids);
+        assert_eq!(mask.iter().filter(|&&m| m).count(), 6);
+        assert!((0..3).all(|y| mask[y * 4 + 1] && mask[y * 4 + 2] && !mask[y * 4] && !mask[y * 4 + 3]));
+        let b = vec![[1.0f32; 3]; 12];
+        let a: Vec<[f32; 3]> = (0..12).map(|i| if mask[i] { [3.0; 3] } else { [1.0; 3] }).collect();
+        for (ia, ib) in [(Some(ids.clone()), None), (None, Some(ids.clone()))] {
+            let r = agreement(&picture("a", 4, a.clone(), ia), &picture("b", 4, b.clone(), ib)).unwrap();
+            assert_eq!((r.masked_pixels, r.lit_pixels), (6, 6));
+            assert!(r.relative_rmse < 1e-9 && r.surface_ids, "{r:?}");
+        }
+        let r = agreement(&picture("a", 4, a, None), &picture("b", 4, b, None)).unwrap();
+        assert_eq!(r.masked_pixels, 0);
+        assert!((r.relative_rmse - 2.0f64.sqrt()).abs() < 1e-6, "unmasked, the edge counts: {r:?}");
     }
 }

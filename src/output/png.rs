@@ -1,5 +1,6 @@
 //! A tone-mapped preview: linear radiance × 2^exposure, clamped, sRGB-encoded, 8-bit PNG.
 
+use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
@@ -24,18 +25,33 @@ pub fn write(path: &Path, width: u32, height: u32, pixels: &[Vec4], exposure: f3
     write_rgb8(path, width, height, &tone_map(pixels, exposure))
 }
 
+/// Stages the tone-mapped image among `outputs` (written with the others, or not at all).
+pub fn stage(
+    outputs: &mut atomic::Outputs,
+    path: &Path,
+    (width, height): (u32, u32),
+    pixels: &[Vec4],
+    exposure: f32,
+) -> Result<()> {
+    let rgb = tone_map(pixels, exposure);
+    outputs.stage(path, |w| encode_rgb8(w, width, height, &rgb))
+}
+
 /// Writes 8-bit sRGB RGB bytes, row-major from the top, as a PNG, atomically.
 pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    atomic::write_file(path, |w| {
-        let mut encoder = png::Encoder::new(w, width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = encoder.write_header()?;
-        writer.write_image_data(rgb)?;
-        writer.finish()?;
-        Ok(())
-    })
+    atomic::write_file(path, |w| encode_rgb8(w, width, height, rgb))
+}
+
+/// Encodes 8-bit sRGB RGB bytes as a PNG into `w`.
+pub fn encode_rgb8(w: &mut impl Write, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    let mut encoder = png::Encoder::new(w, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb)?;
+    writer.finish()?;
+    Ok(())
 }
 
 #[cfg(test)]

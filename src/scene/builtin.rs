@@ -25,7 +25,8 @@ pub fn from_groups(
         .collect();
     let mut warnings = Vec::new();
     let mesh = Mesh::new(&groups, materials, &mut warnings).expect("built-in scenes have triangles");
-    Scene { path: "(built in)".into(), mesh, camera, image: size, render: toml::Table::new(), warnings }
+    let render = toml::Table::new();
+    Scene { path: "(built in)".into(), mesh, camera, image: size, render, warnings, inputs: Vec::new() }
 }
 
 /// A room open towards the camera, 2 × 2 × 2 units, with a red and a green wall, a large ceiling light

@@ -21,10 +21,12 @@ impl Camera {
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, vfov_deg: f32) -> Result<Self> {
         ensure!(eye.is_finite() && target.is_finite() && up.is_finite(), "camera vectors must be finite");
         ensure!(vfov_deg > 0.0 && vfov_deg < 180.0, "camera vfov_deg must lie in (0, 180), got {vfov_deg}");
-        let forward = (target - eye).normalize_or_zero();
-        ensure!(forward != Vec3::ZERO, "camera eye and target coincide");
-        let right = forward.cross(up).normalize_or_zero();
-        ensure!(right != Vec3::ZERO, "camera up is parallel to the viewing direction");
+        let view = target - eye;
+        ensure!(view.is_finite(), "camera eye and target are too far apart for 32-bit floats");
+        let forward = direction(view).ok_or_else(|| anyhow::anyhow!("camera eye and target coincide"))?;
+        let up_direction = direction(up).ok_or_else(|| anyhow::anyhow!("camera up must not be zero"))?;
+        let right = direction(forward.cross(up_direction))
+            .ok_or_else(|| anyhow::anyhow!("camera up is parallel to the viewing direction"))?;
         Ok(Self { eye, forward, right, up: right.cross(forward), vfov: vfov_deg.to_radians() })
     }
 
@@ -43,6 +45,13 @@ impl Camera {
         projection(self.vfov, width as f32 / height as f32, near)
             * view_matrix(self.eye, self.right, self.up, self.forward)
     }
+}
+
+/// The unit vector along `v`, or `None` for a zero vector. Scaled first, so that a finite vector whose
+/// length overflows f32 (components ≳ 1.8e19) still has its direction.
+fn direction(v: Vec3) -> Option<Vec3> {
+    let largest = v.abs().max_element();
+    (largest > 0.0 && largest.is_finite()).then(|| (v / largest).normalize())
 }
 
 /// World → view space for an eye with orthonormal `right`, `up`, `forward` (view space looks down −z).

@@ -10,7 +10,7 @@ pub mod surfaces;
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context as _, Result, ensure};
+use anyhow::{Context as _, Result, bail, ensure};
 use glam::Vec3;
 
 pub use camera::Camera;
@@ -79,7 +79,18 @@ impl Mesh {
     /// Builds the mesh from groups of triangles, dropping degenerate ones and assigning surface ids.
     /// `warnings` receives what was dropped.
     pub fn new(groups: &[obj::ObjGroup], materials: Vec<Material>, warnings: &mut Vec<String>) -> Result<Self> {
-        let (triangles, surfaces, degenerate) = surfaces::assign(groups, &materials);
+        let (triangles, surfaces, dropped) = surfaces::assign(groups, &materials);
+        if let Some((group, v)) = &dropped.first_overflowing {
+            bail!(
+                "{} triangle(s) too large for 32-bit floats: their area overflows (the first, in group '{group}': \
+                 {}, {}, {}); scale the mesh down",
+                dropped.overflowing,
+                v[0],
+                v[1],
+                v[2]
+            );
+        }
+        let degenerate = dropped.degenerate;
         if degenerate > 0 {
             warnings.push(format!("dropped {degenerate} degenerate (zero-area) triangle(s)"));
         }
@@ -100,6 +111,32 @@ impl Mesh {
             bounds.max
         );
         Ok(Self { triangles, surfaces, materials, bounds })
+    }
+
+    /// Warnings about the light in the scene, each naming what it is about: no surface emits (the image is
+    /// then black at ε = 0 with a black background), or a material in use reflects more than it receives
+    /// (`Kd` above 1: energy gain).
+    pub fn lighting_warnings(&self) -> Vec<String> {
+        let mut used: Vec<usize> = self.surfaces.iter().map(|s| s.material).collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut warnings = Vec::new();
+        if !used.iter().any(|&m| self.materials[m].is_emitter()) {
+            warnings.push(
+                "no surface emits light (no material in use has Ke > 0): the image shows only Kd·ε and the \
+                 background, and is black at ε = 0 with a black background"
+                    .to_owned(),
+            );
+        }
+        for m in used.iter().map(|&m| &self.materials[m]) {
+            if m.kd.max_element() > 1.0 {
+                warnings.push(format!(
+                    "material '{}' has Kd {} {} {}, above 1: it reflects more light than it receives (energy gain)",
+                    m.name, m.kd.x, m.kd.y, m.kd.z
+                ));
+            }
+        }
+        warnings
     }
 
     pub fn material_of(&self, surface: SurfaceId) -> &Material {
@@ -127,11 +164,19 @@ pub struct Scene {
     pub image: ImageSize,
     /// The scene file's `[render]` table, uninterpreted (read by `params::Overrides::from_scene_table`).
     pub render: toml::Table,
-    /// Warnings met while loading (undefined materials, dropped triangles, …).
+    /// Warnings met while loading (undefined materials, dropped triangles, no emitter, `Kd` above 1, …).
     pub warnings: Vec<String>,
+    /// The files it was read from: the scene file, the mesh, its material libraries (none when built in).
+    /// Outputs must not overwrite them.
+    pub inputs: Vec<PathBuf>,
 }
 
 impl Scene {
+    /// [`Scene::inputs`] as paths.
+    pub fn input_paths(&self) -> Vec<&Path> {
+        self.inputs.iter().map(PathBuf::as_path).collect()
+    }
+
     /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line.
     pub fn load(path: &Path) -> Result<Self> {
         let file = file::SceneFile::read(path)?;
@@ -149,6 +194,9 @@ impl Scene {
         let mut warnings = obj.warnings;
         let mesh =
             Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings })
+        warnings.extend(mesh.lighting_warnings());
+        let mut inputs = vec![path.to_owned()];
+        inputs.extend(obj.files);
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings, inputs })
     }
 }

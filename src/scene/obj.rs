@@ -1,8 +1,11 @@
 //! OBJ + MTL loading through `tobj`, behind a checking pass that gives every error its `file:line`.
 //!
-//! The checking pass also fixes what real files do and `tobj` does not expect: `# comments` after values,
-//! statements `tobj` does not know (curves, `lod`, …; dropped with a warning), and an `mtllib` path written
-//! relative to some other directory (looked for by file name next to the OBJ).
+//! The checking pass also fixes what real files do and `tobj` does not expect: a UTF-8 byte order mark,
+//! `# comments` after values, tabs or several spaces after a statement's keyword (it rewrites each statement
+//! as keyword, one space, arguments), `vt u` without v, vertex colours on some vertices only (dropped: unused
+//! here), statements `tobj` does not know (curves, `lod`, …; dropped with a warning), and an `mtllib` path
+//! written relative to some other directory (looked for by file name next to the OBJ). Lines (`l`) and points
+//! (`p`) are checked and dropped: `tobj` would make a triangle of a three-point line.
 
 use std::cell::RefCell;
 use std::collections::BTreeSet;
@@ -52,6 +55,8 @@ pub struct ObjData {
     pub groups: Vec<ObjGroup>,
     pub materials: Vec<Material>,
     pub warnings: Vec<String>,
+    /// The files read: the OBJ, then each material library.
+    pub files: Vec<PathBuf>,
 }
 
 /// OBJ statements that are valid but carry nothing this renderer uses (free-form geometry, display hints).
@@ -87,17 +92,18 @@ const IGNORED_STATEMENTS: &[&str] = &[
 ];
 
 pub fn load(path: &Path) -> Result<ObjData, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|e| error(path, None, format!("cannot read mesh: {e}")))?;
+    let text = read_text(path).map_err(|e| error(path, None, format!("cannot read mesh: {e}")))?;
     let mut warnings = Vec::new();
     let checked = check_obj(path, &text, &mut warnings)?;
 
     let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
     let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);
     let mtl_warnings = RefCell::new(Vec::new());
+    let files = RefCell::new(vec![path.to_owned()]);
     let options =
         tobj::LoadOptions { triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
     let loaded = tobj::load_obj_buf(&mut checked.text.as_bytes(), &options, |mtllib| {
-        match load_mtl(&dir, mtllib, &mut mtl_warnings.borrow_mut()) {
+        match load_mtl(&dir, mtllib, &mut mtl_warnings.borrow_mut(), &mut files.borrow_mut()) {
             Ok(result) => result,
             Err(e) => {
                 mtl_error.borrow_mut().get_or_insert(e);
@@ -144,7 +150,44 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             ObjGroup { name: model.name, material: model.mesh.material_id.unwrap_or(default_material), triangles }
         })
         .collect();
-    Ok(ObjData { groups, materials, warnings })
+    Ok(ObjData { groups, materials, warnings, files: files.into_inner() })
+}
+
+/// A text file without its UTF-8 byte order mark. Only a regular file is read: a FIFO or a device named as a
+/// mesh (`/dev/zero`) would never end.
+fn read_text(path: &Path) -> std::io::Result<String> {
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        let what = if kind.is_dir() { "it is a directory" } else { "it is not a regular file" };
+        return Err(std::io::Error::other(what));
+    }
+    let text = std::fs::read_to_string(path)?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_owned(),
+        None => text,
+    })
+}
+
+/// A statement with comments stripped: its keyword, its arguments as written (inner spacing kept, for names
+/// with spaces), and its words.
+struct Statement<'a> {
+    keyword: &'a str,
+    rest: &'a str,
+    args: Vec<&'a str>,
+}
+
+fn statement(raw: &str) -> Option<Statement<'_>> {
+    let line = raw.split('#').next().unwrap_or("").trim();
+    let mut words = line.split_whitespace();
+    let keyword = words.next()?;
+    Some(Statement { keyword, rest: line[keyword.len()..].trim(), args: words.collect() })
+}
+
+impl Statement<'_> {
+    /// The statement as `tobj` reads it: one space between keyword and arguments.
+    fn normalised(&self) -> String {
+        if self.rest.is_empty() { self.keyword.to_owned() } else { format!("{} {}", self.keyword, self.rest) }
+    }
 }
 
 struct CheckedObj {
@@ -161,14 +204,13 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
     let mut ignored = BTreeSet::new();
     for (index, raw) in text.lines().enumerate() {
         let line_no = index + 1;
-        let line = raw.split('#').next().unwrap_or("").trim();
         let err = |message: String| error(path, Some(line_no), message);
-        let mut words = line.split_whitespace();
-        let Some(keyword) = words.next() else {
+        let Some(st) = statement(raw) else {
             out.push('\n');
             continue;
         };
-        let args: Vec<&str> = words.collect();
+        let (keyword, args) = (st.keyword, &st.args);
+        let mut line = st.normalised();
         match keyword {
             "v" => {
                 // x y z [w] or x y z r g b
@@ -178,33 +220,77 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                         args.len()
                     )));
                 }
-                let values = parse_numbers(&args)
-                    .map_err(|bad| err(format!("'v' has a value that is not a number: '{bad}'")))?;
+                let values =
+                    parse_numbers(args).map_err(|bad| err(format!("'v' has a value that is not a number: '{bad}'")))?;
                 if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
                     return Err(err(format!("vertex coordinate {bad} is not finite")));
                 }
-                if args.len() == 4 && values[3] == 0.0 {
-                    return Err(err("vertex weight w is 0".into()));
+                if args.len() == 4 {
+                    let w = values[3];
+                    if w == 0.0 {
+                        return Err(err("vertex weight w is 0".into()));
+                    }
+                    // tobj divides the coordinates by w.
+                    if let Some(bad) = values[..3].iter().map(|x| x / w).find(|x| !x.is_finite()) {
+                        return Err(err(format!("vertex coordinate divided by its weight w {w} is {bad}, not finite")));
+                    }
+                }
+                if args.len() == 6 {
+                    // Vertex colours are not used here, and tobj fails on a face whose vertices are not all
+                    // coloured: keep the position only.
+                    line = format!("v {} {} {}", args[0], args[1], args[2]);
                 }
                 counts[0] += 1;
             }
             "vt" | "vn" => {
-                parse_numbers(&args)
+                let values = parse_numbers(args)
                     .map_err(|bad| err(format!("'{keyword}' has a value that is not a number: '{bad}'")))?;
+                if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
+                    return Err(err(format!("'{keyword}' value {bad} is not finite")));
+                }
+                if keyword == "vt" {
+                    if !(1..=3).contains(&values.len()) {
+                        return Err(err(format!("'vt' takes 1 to 3 values (u [v [w]]), found {}", values.len())));
+                    }
+                    if values.len() == 1 {
+                        line.push_str(" 0"); // v defaults to 0; tobj wants it
+                    }
+                } else if values.len() != 3 {
+                    return Err(err(format!("'vn' takes 3 values, found {}", values.len())));
+                }
                 counts[if keyword == "vt" { 1 } else { 2 }] += 1;
             }
             "f" | "l" | "p" => {
-                if keyword == "f" && args.len() < 3 {
-                    return Err(err(format!("a face needs at least 3 vertices, found {}", args.len())));
+                let least = match keyword {
+                    "f" => 3,
+                    "l" => 2,
+                    _ => 1,
+                };
+                if args.len() < least {
+                    let what = match keyword {
+                        "f" => "a face",
+                        "l" => "a line",
+                        _ => "a point statement",
+                    };
+                    return Err(err(format!("{what} needs at least {least} vertices, found {}", args.len())));
                 }
-                for vertex in &args {
+                for vertex in args {
                     check_face_vertex(vertex, &counts).map_err(|m| err(format!("face vertex '{vertex}': {m}")))?;
+                }
+                if keyword != "f" {
+                    // Checked, then dropped: lines and points have no area to light.
+                    out.push('\n');
+                    continue;
                 }
             }
             "usemtl" => {
-                let Some(name) = args.first() else { return Err(err("'usemtl' needs a material name".into())) };
+                // The whole rest of the line is the name, as tobj takes it.
+                let name = st.rest;
+                if name.is_empty() {
+                    return Err(err("'usemtl' needs a material name".into()));
+                }
                 if !used_materials.iter().any(|(n, _)| n == name) {
-                    used_materials.push(((*name).to_owned(), line_no));
+                    used_materials.push((name.to_owned(), line_no));
                 }
             }
             "mtllib" => {
@@ -220,7 +306,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
             }
             other => return Err(err(format!("unknown statement '{other}' (not an OBJ line)"))),
         }
-        out.push_str(line);
+        out.push_str(&line);
         out.push('\n');
     }
     if !ignored.is_empty() {
@@ -248,8 +334,9 @@ fn check_face_vertex(vertex: &str, counts: &[usize; 3]) -> Result<(), String> {
             continue;
         }
         let index: i64 = part.parse().map_err(|_| format!("'{part}' is not an integer index"))?;
-        let count = counts[slot] as i64;
-        let valid = (index > 0 && index <= count) || (index < 0 && -index <= count);
+        let count = counts[slot] as u64;
+        // unsigned_abs: -i64::MIN does not fit an i64.
+        let valid = index != 0 && index.unsigned_abs() <= count;
         if !valid {
             let what = ["vertex", "texture coordinate", "normal"][slot];
             return Err(format!("{what} index {index} does not refer to one of the {count} defined so far"));
@@ -259,7 +346,12 @@ fn check_face_vertex(vertex: &str, counts: &[usize; 3]) -> Result<(), String> {
 }
 
 /// Loads an MTL named by `mtllib`: beside the OBJ as written, else by file name beside the OBJ.
-fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<tobj::MTLLoadResult, LoadError> {
+fn load_mtl(
+    dir: &Path,
+    requested: &Path,
+    warnings: &mut Vec<String>,
+    files: &mut Vec<PathBuf>,
+) -> Result<tobj::MTLLoadResult, LoadError> {
     let as_written = dir.join(requested);
     let by_name = requested.file_name().map(|name| dir.join(name));
     let path = if as_written.is_file() {
@@ -281,7 +373,8 @@ fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<
         ));
         return Ok(Err(tobj::LoadError::OpenFileFailed));
     };
-    let text = std::fs::read_to_string(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
+    let text = read_text(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
+    files.push(path.clone());
     let checked = check_mtl(&path, &text)?;
     // `check_mtl` rejects everything tobj would; a parse error here must still not pass for "no materials".
     let materials =
@@ -295,15 +388,16 @@ fn load_mtl(dir: &Path, requested: &Path, warnings: &mut Vec<String>) -> Result<
 fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
     let mut out = String::with_capacity(text.len());
     for (index, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("").trim();
-        let mut words = line.split_whitespace();
-        let keyword = words.next().unwrap_or("");
-        let args: Vec<&str> = words.collect();
+        let Some(st) = statement(raw) else {
+            out.push('\n');
+            continue;
+        };
+        let (keyword, args, line) = (st.keyword, &st.args, st.normalised());
         let err = |message: String| error(path, Some(index + 1), message);
         match keyword {
             "Kd" | "Ke" | "Ka" | "Ks" => {
                 let values =
-                    parse_numbers(&args).map_err(|bad| err(format!("'{keyword}' value '{bad}' is not a number")))?;
+                    parse_numbers(args).map_err(|bad| err(format!("'{keyword}' value '{bad}' is not a number")))?;
                 if values.len() != 3 || values.iter().any(|v| !v.is_finite() || *v < 0.0) {
                     return Err(err(format!("'{keyword}' needs 3 finite non-negative numbers")));
                 }
@@ -323,7 +417,7 @@ fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
             }
             _ => {}
         }
-        out.push_str(line);
+        out.push_str(&line);
         out.push('\n');
     }
     Ok(out)

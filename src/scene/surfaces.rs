@@ -13,20 +13,33 @@ use super::{Surface, SurfaceId, Triangle};
 /// Largest angle between the normals of two edge-sharing triangles of one surface.
 pub const CREASE_DEG: f32 = 30.0;
 
-/// Returns the non-degenerate triangles with their surface ids, the surfaces, and how many degenerate
-/// triangles were dropped.
-pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<Surface>, usize) {
+/// What [`assign`] found besides the surfaces.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Dropped {
+    /// Triangles without area, dropped.
+    pub degenerate: usize,
+    /// Triangles whose area (or edge lengths squared) overflows f32, with the first one and its group.
+    pub overflowing: usize,
+    pub first_overflowing: Option<(String, [Vec3; 3])>,
+}
+
+/// Returns the triangles with area, with their surface ids, the surfaces, and what was left out.
+pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<Surface>, Dropped) {
     let mut triangles = Vec::new();
     let mut surfaces = Vec::new();
-    let mut degenerate = 0;
+    let mut dropped = Dropped::default();
     let cos_crease = CREASE_DEG.to_radians().cos();
 
     for group in groups {
         let mut local: Vec<([Vec3; 3], Vec3)> = Vec::with_capacity(group.triangles.len());
         for &v in &group.triangles {
             match face_normal(v) {
-                Some(n) => local.push((v, n)),
-                None => degenerate += 1,
+                Shape::Normal(n) => local.push((v, n)),
+                Shape::Degenerate => dropped.degenerate += 1,
+                Shape::Overflow => {
+                    dropped.overflowing += 1;
+                    dropped.first_overflowing.get_or_insert_with(|| (group.name.clone(), v));
+                }
             }
         }
         let mut sets = DisjointSets::new(local.len());
@@ -65,16 +78,30 @@ pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Ve
             };
         }
     }
-    (triangles, surfaces, degenerate)
+    (triangles, surfaces, dropped)
 }
 
-/// The unit front normal (CCW winding), or `None` for a triangle without area.
-pub fn face_normal(v: [Vec3; 3]) -> Option<Vec3> {
+/// A triangle's shape as f32 arithmetic sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// The unit front normal (CCW winding).
+    Normal(Vec3),
+    /// No area.
+    Degenerate,
+    /// Finite corners, but twice its area or an edge length squared is beyond f32 (edges ≳ 1.8e19).
+    Overflow,
+}
+
+pub fn face_normal(v: [Vec3; 3]) -> Shape {
     let cross = (v[1] - v[0]).cross(v[2] - v[0]);
     let longest =
         (v[1] - v[0]).length_squared().max((v[2] - v[1]).length_squared()).max((v[0] - v[2]).length_squared());
+    let area = cross.length();
+    if !area.is_finite() || !longest.is_finite() {
+        return Shape::Overflow;
+    }
     // Relative test: area must not vanish against the triangle's own size.
-    (cross.length() > 1e-7 * longest).then(|| cross.normalize())
+    if area > 1e-7 * longest { Shape::Normal(cross / area) } else { Shape::Degenerate }
 }
 
 fn bits(p: Vec3) -> [u32; 3] {
@@ -124,8 +151,8 @@ mod tests {
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
         let groups = [ObjGroup { name: "box".into(), material: 0, triangles }];
         let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, surfaces, degenerate) = assign(&groups, &materials);
-        assert_eq!(degenerate, 0);
+        let (tris, surfaces, dropped) = assign(&groups, &materials);
+        assert_eq!(dropped, Dropped::default());
         assert_eq!(surfaces.len(), 2);
         let ids: Vec<_> = tris.iter().map(|t| t.surface).collect();
         assert_eq!(ids, [1, 1, 2, 2]);
@@ -140,8 +167,17 @@ mod tests {
             triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],
         }];
         let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, surfaces, degenerate) = assign(&groups, &materials);
-        assert_eq!((tris.len(), surfaces.len(), degenerate), (1, 1, 1));
+        let (tris, surfaces, dropped) = assign(&groups, &materials);
+        assert_eq!((tris.len(), surfaces.len(), dropped.degenerate), (1, 1, 1));
         assert!((tris[0].normal - Vec3::Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn an_area_beyond_f32_is_not_called_degenerate() {
+        let big = [Vec3::ZERO, Vec3::X * 1e30, Vec3::Y * 1e30];
+        assert_eq!(face_normal(big), Shape::Overflow);
+        // Tiny but well-formed triangles keep their normal.
+        assert_eq!(face_normal([Vec3::ZERO, Vec3::X * 1e-5, Vec3::Y * 1e-5]), Shape::Normal(Vec3::Z));
+        assert_eq!(face_normal([Vec3::ZERO, Vec3::X, Vec3::X * 2.0]), Shape::Degenerate);
     }
 }
