@@ -24,8 +24,8 @@ impl Camera {
         let view = target - eye;
         ensure!(view.is_finite(), "camera eye and target are too far apart for 32-bit floats");
         let forward = direction(view).ok_or_else(|| anyhow::anyhow!("camera eye and target coincide"))?;
-        let up_direction = direction(up).ok_or_else(|| anyhow::anyhow!("camera up must not be zero"))?;
-        let right = direction(forward.cross(up_direction))
+        ensure!(direction(up).is_some(), "camera up must not be zero");
+        let right = direction(forward.cross(up))
             .ok_or_else(|| anyhow::anyhow!("camera up is parallel to the viewing direction"))?;
         Ok(Self { eye, forward, right, up: right.cross(forward), vfov: vfov_deg.to_radians() })
     }
@@ -47,9 +47,14 @@ impl Camera {
     }
 }
 
-/// The unit vector along `v`, or `None` for a zero vector. Scaled first, so that a finite vector whose
-/// length overflows f32 (components ≳ 1.8e19) still has its direction.
+/// The unit vector along `v`, or `None` for a zero vector. A finite vector whose length overflows f32
+/// (components ≳ 1.8e19) is scaled down first and still has its direction; any other is normalised as is,
+/// so that the camera of an ordinary scene is bit for bit what plain normalisation gives.
 fn direction(v: Vec3) -> Option<Vec3> {
+    let plain = v.normalize_or_zero();
+    if plain != Vec3::ZERO {
+        return Some(plain);
+    }
     let largest = v.abs().max_element();
     (largest > 0.0 && largest.is_finite()).then(|| (v / largest).normalize())
 }

@@ -100,8 +100,9 @@ pub fn face_normal(v: [Vec3; 3]) -> Shape {
     if !area.is_finite() || !longest.is_finite() {
         return Shape::Overflow;
     }
-    // Relative test: area must not vanish against the triangle's own size.
-    if area > 1e-7 * longest { Shape::Normal(cross / area) } else { Shape::Degenerate }
+    // Relative test: area must not vanish against the triangle's own size. `normalize` (a multiply by the
+    // reciprocal, not a division) keeps normals, and so every sensor frame, bit for bit what they were.
+    if area > 1e-7 * longest { Shape::Normal(cross.normalize()) } else { Shape::Degenerate }
 }
 
 fn bits(p: Vec3) -> [u32; 3] {
