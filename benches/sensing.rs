@@ -6,7 +6,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
-use sensorlight::params::{EstimatorParams, FrameParams};
+use sensorlight::params::{EstimatorKind, EstimatorParams, FrameParams};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{self, Renderer, probe_pixels};
 use sensorlight::scene::{ImageSize, builtin};
@@ -27,7 +27,7 @@ fn gpu_sensing(c: &mut Criterion) {
     group.sample_size(10);
     for rd in [32, 128] {
         for kind in StrategyKind::ALL {
-            match renderer::self_check(&device, SensorKind::Hemicube, kind) {
+            match renderer::self_check(&device, SensorKind::Hemicube, EstimatorKind::Exact, kind) {
                 Ok(check) if check.passed => {}
                 _ => continue,
             }

@@ -12,6 +12,11 @@ layout(std430, set = 0, binding = 3) buffer SensorPushes { SensorPush sensor_pus
 layout(std430, set = 0, binding = 4) buffer ReducePushes { ReducePush reduce_pushes[]; };
 layout(std430, set = 0, binding = 5) buffer Quads { GpuQuad quads[]; };
 layout(std430, set = 0, binding = 6) buffer ImagePushes { ImagePush image_pushes[]; };
+layout(std430, set = 0, binding = 7) buffer Sensors { GpuSensor sensors[]; };
+layout(std430, set = 0, binding = 8) buffer Zooms { GpuZoom zooms[]; };
+layout(std430, set = 0, binding = 9) buffer Emitters { GpuEmitter emitters[]; };
+layout(std430, set = 0, binding = 10) buffer Groups { GpuLightGroup groups[]; };
+layout(std430, set = 0, binding = 11) buffer Results { GpuSensorResult results[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -22,4 +27,9 @@ void main() {
     reduce_pushes[1] = reduce_pushes[0];
     quads[1] = quads[0];
     image_pushes[1] = image_pushes[0];
+    sensors[1] = sensors[0];
+    zooms[1] = zooms[0];
+    emitters[1] = emitters[0];
+    groups[1] = groups[0];
+    results[1] = results[0];
 }

@@ -13,12 +13,16 @@
 
 out gl_PerVertex {
     vec4 gl_Position;
-    float gl_ClipDistance[5];
+    float gl_ClipDistance[8];
 };
 
 void main() {
     GpuSensorView view = views[gl_InstanceIndex];
-    vec4 clip = sensor_vertex(view, gl_ClipDistance[4]);
+    float planes[4];
+    vec4 clip = sensor_vertex(view, planes);
+    for (int k = 0; k < 4; k++) {
+        gl_ClipDistance[4 + k] = planes[k];
+    }
     gl_ClipDistance[0] = clip.w - clip.x;
     gl_ClipDistance[1] = clip.w + clip.x;
     gl_ClipDistance[2] = clip.w - clip.y;

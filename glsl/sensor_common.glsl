@@ -1,6 +1,10 @@
 // What every sensor-map vertex shader does (paper §III-E), whatever the batching strategy: transform by
-// the view, clip at the view's plane (hemicube horizon), and prepare Ck of both sides of the triangle
-// (paper §III-C) so that the fragment shader (sensor.frag) only picks one by gl_FrontFacing.
+// the view, clip at the view's planes (hemicube horizon, a frustum sensor's sides for its zoom views; an
+// emitters-only view clips everything else), and prepare both sides of the triangle (paper §III-C) so
+// that the fragment shader (sensor.frag) only picks one by gl_FrontFacing:
+//   back, or front of a non-emitter: Kd * epsilon;
+//   front of an emitter: Ke (the paper's estimator), or 0 and its light group (the exact one, whose
+//   emitter light is computed in closed form and only its visibility read from the map).
 #ifndef SENSOR_COMMON_GLSL
 #define SENSOR_COMMON_GLSL
 #include "types.glsl"
@@ -14,14 +18,23 @@ layout(push_constant) uniform Push { SensorPush push; };
 
 layout(location = 0) flat out vec3 out_ck_front;
 layout(location = 1) flat out vec3 out_ck_back;
+layout(location = 2) flat out float out_group;  // light group + 1 of an emitter, else 0
 
-// Clip-space position of this vertex in `view`, and Ck of its triangle's two sides.
-vec4 sensor_vertex(GpuSensorView view, out float horizon_distance) {
+// Clip-space position of this vertex in `view`, its distances to the view's clip planes, and the triangle's
+// two sides.
+vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
     vec4 p = vec4(in_position, 1.0);
-    horizon_distance = dot(view.clip_plane, p);
+    for (int k = 0; k < 4; k++) {
+        clip_distance[k] = dot(view.clip[k], p);
+    }
     GpuSurface s = surfaces[in_surface];
+    bool emitter = s.ke.w > 0.0;
+    if ((view.flags & VIEW_EMITTERS_ONLY) != 0u && !emitter) {
+        clip_distance[0] = -1.0;
+    }
     out_ck_back = s.kd.rgb * push.epsilon;
-    out_ck_front = s.ke.w > 0.0 ? s.ke.rgb : out_ck_back;
+    out_ck_front = emitter ? (push.exact != 0u ? vec3(0.0) : s.ke.rgb) : out_ck_back;
+    out_group = emitter ? s.ke.w : 0.0;
     return view.view_proj * p;
 }
 #endif

@@ -6,12 +6,14 @@
 
 out gl_PerVertex {
     vec4 gl_Position;
-    float gl_ClipDistance[1];
+    float gl_ClipDistance[4];
 };
 
 void main() {
     // firstInstance of the draw is the first view drawn.
     GpuSensorView view = views[gl_InstanceIndex];
-    gl_Position = sensor_vertex(view, gl_ClipDistance[0]);
+    float clip[4];
+    gl_Position = sensor_vertex(view, clip);
+    gl_ClipDistance = clip;
     gl_Layer = int(view.layer - push.layer_base);
 }

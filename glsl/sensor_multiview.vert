@@ -6,10 +6,12 @@
 
 out gl_PerVertex {
     vec4 gl_Position;
-    float gl_ClipDistance[1];
+    float gl_ClipDistance[4];
 };
 
 void main() {
     GpuSensorView view = views[push.first_view + uint(gl_ViewIndex)];
-    gl_Position = sensor_vertex(view, gl_ClipDistance[0]);
+    float clip[4];
+    gl_Position = sensor_vertex(view, clip);
+    gl_ClipDistance = clip;
 }

@@ -6,7 +6,7 @@
 // Indexed by surface id; entry 0 is "no surface".
 struct GpuSurface {
     vec4 kd;  // albedo Kd (rgb)
-    vec4 ke;  // emitted radiance Ke (rgb); w = 1 for an emitter (front face only)
+    vec4 ke;  // emitted radiance Ke (rgb); w = light group + 1 for an emitter (front face only), else 0
 };
 
 struct GBufferPush {
@@ -15,9 +15,45 @@ struct GBufferPush {
 
 struct GpuSensorView {
     mat4 view_proj;
-    vec4 clip_plane;  // keep dot(clip_plane, vec4(p, 1)) >= 0
-    uint layer;       // layer of the sensor-map array
-    uint _pad[3];
+    vec4 clip[4];  // keep dot(clip[k], vec4(p, 1)) >= 0
+    uint layer;    // layer of the sensor-map array
+    uint flags;    // VIEW_EMITTERS_ONLY
+    uint _pad[2];
+};
+
+const uint VIEW_EMITTERS_ONLY = 1u;
+
+struct GpuSensor {
+    vec4 origin;  // w: frustum half-width tan(fov/2), 0 for the hemisphere
+    vec4 t;
+    vec4 b;
+    vec4 n;
+};
+
+struct GpuZoom {
+    vec4 right;    // w: tan of half the field of view
+    vec4 up;
+    vec4 forward;  // w: 1 where the group can be seen
+};
+
+struct GpuEmitter {
+    vec4 v0;  // counter-clockwise seen from the emitting front
+    vec4 v1;
+    vec4 v2;
+    vec4 ke;
+};
+
+struct GpuLightGroup {
+    uint first;
+    uint count;
+    uint _pad[2];
+};
+
+const uint MAX_GROUPS = 8u;
+
+struct GpuSensorResult {
+    vec4 r;
+    float visibility[MAX_GROUPS];  // -1 where the group sends nothing
 };
 
 struct SensorPush {
@@ -26,14 +62,17 @@ struct SensorPush {
     uint layer_base;     // subtracted from a view's layer (layered strategies)
     uint atlas_columns;  // tiles per row of the atlas (atlas strategy)
     uint atlas_rows;
-    uint _pad[3];
+    uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
+    uint _pad[2];
 };
 
 struct ReducePush {
     uint rd;             // sensor map side
-    uint layers;         // layers per sensor
+    uint layers;         // layers per sensor: main, then a zoom pair per light group
+    uint main_layers;    // summed with the precomputed weights
     uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
-    uint _pad;
+    uint groups;         // light groups measured (0: the paper's estimator)
+    uint _pad[3];
 };
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).

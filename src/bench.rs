@@ -9,16 +9,20 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::params::{EstimatorParams, FrameParams};
+use crate::light::groups::Lights;
+use crate::params::{EstimatorKind, EstimatorParams, FrameParams};
 use crate::passes::fill::FillPass;
 use crate::passes::sensor_maps::{self, StrategyDesc};
 use crate::renderer::{self, DEFAULT_IN_FLIGHT, Renderer, default_memory_budget, probe_pixels};
 use crate::scene::{ImageSize, Scene};
+use crate::sensors::layout::SensorLayout;
 use crate::strategy::{CheckResult, StrategyKind};
 use crate::vk::Device;
 
 pub struct BenchConfig {
     pub scene: Scene,
+    /// How R is read from the maps (the exact estimator adds a zoom pair of layers per light group).
+    pub estimator_kind: EstimatorKind,
     /// The view the sensors are picked from (surface pixels, spread evenly at random).
     pub size: ImageSize,
     pub estimator: EstimatorParams,
@@ -104,12 +108,17 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(Be
     let mut skipped = Vec::new();
     let mut strategies = Vec::new();
     for &kind in &config.strategies {
-        let desc = StrategyDesc { sensor, rd: config.sizes.iter().copied().max().unwrap_or(32), budget, near: 0.0 };
+        let groups = match config.estimator_kind {
+            EstimatorKind::Exact => Lights::new(&config.scene.mesh).groups.len() as u32,
+            EstimatorKind::Paper => 0,
+        };
+        let rd = config.sizes.iter().copied().max().unwrap_or(32);
+        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, rd, budget };
         if let Some(why) = sensor_maps::unsupported(kind, device, &desc) {
             skipped.push((kind, format!("unsupported: {why}")));
             continue;
         }
-        let check = renderer::self_check(device, sensor, kind)?;
+        let check = renderer::self_check(device, sensor, config.estimator_kind, kind)?;
         events(BenchEvent::Checked { strategy: kind, result: check });
         checks.push((kind, check));
         if check.passed {
@@ -129,14 +138,18 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(Be
         dradiance: 0.0,
         filter_radius: 0,
     };
-    let layers = sensor.layers() as u64;
+    let layers = sensor.layers() as u64; // the main layers: the fill rate's yardstick
     let mut pixels = Vec::new();
     let mut measurements = Vec::new();
     let mut sizes = Vec::new();
     for &rd in &config.sizes {
         let mut renderers = strategies
             .iter()
-            .map(|&kind| Renderer::builder(device, &config.scene, sensor, rd).build_unchecked(kind))
+            .map(|&kind| {
+                Renderer::builder(device, &config.scene, sensor, rd)
+                    .estimator(config.estimator_kind)
+                    .build_unchecked(kind)
+            })
             .collect::<Result<Vec<_>>>()?;
         if pixels.is_empty()
             && let Some(r) = renderers.first()

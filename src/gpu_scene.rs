@@ -8,7 +8,8 @@ use anyhow::Result;
 use ash::vk;
 use glam::Vec4;
 
-use crate::gpu_types::{GpuSurface, Vertex};
+use crate::gpu_types::{GpuEmitter, GpuLightGroup, GpuSurface, MAX_GROUPS, Vertex};
+use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene};
 use crate::vk::{Buffer, Device, transfer};
 
@@ -19,12 +20,34 @@ pub struct GpuScene {
     pub normals: Arc<Buffer>,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
+    /// The emitters, group by group (`GpuEmitter`), and each group's range of them (`GpuLightGroup`).
+    pub emitters: Arc<Buffer>,
+    pub groups: Arc<Buffer>,
+    /// The same on the host: sensors' zoom views bound the groups.
+    pub lights: Lights,
 }
 
 impl GpuScene {
     pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
         let mesh = &scene.mesh;
         let vertices = vertices(mesh);
+        let lights = Lights::new(mesh);
+        const _: () = assert!(groups::MAX_GROUPS == MAX_GROUPS, "the shaders' group count is the light module's");
+        let emitters: Vec<GpuEmitter> = lights
+            .emitters
+            .iter()
+            .map(|e| GpuEmitter {
+                v0: e.v[0].extend(0.0),
+                v1: e.v[1].extend(0.0),
+                v2: e.v[2].extend(0.0),
+                ke: e.ke.extend(0.0),
+            })
+            .collect();
+        let groups: Vec<GpuLightGroup> = lights
+            .groups
+            .iter()
+            .map(|g| GpuLightGroup { first: g.emitters.start, count: g.emitters.len() as u32, _pad: [0; 2] })
+            .collect();
         let normals: Vec<Vec4> = mesh.triangles.iter().map(|t| t.normal.extend(0.0)).collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
@@ -36,7 +59,10 @@ impl GpuScene {
                 vk::BufferUsageFlags::VERTEX_BUFFER | storage,
             )?),
             normals: Arc::new(transfer::upload(device, "triangle normals", &normals, storage)?),
-            surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh), storage)?),
+            surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
+            emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
+            groups: Arc::new(transfer::upload(device, "light groups", &groups, storage)?),
+            lights,
         })
     }
 }
@@ -46,12 +72,13 @@ pub fn vertices(mesh: &Mesh) -> Vec<Vertex> {
     mesh.triangles.iter().flat_map(|t| t.v.map(|p| Vertex { position: p.to_array(), surface: t.surface })).collect()
 }
 
-/// The material table indexed by surface id (entry 0: no surface).
-pub fn surfaces(mesh: &Mesh) -> Vec<GpuSurface> {
+/// The material table indexed by surface id (entry 0: no surface); an emitter's `ke.w` is its group + 1.
+pub fn surfaces(mesh: &Mesh, lights: &Lights) -> Vec<GpuSurface> {
     std::iter::once(GpuSurface::default())
         .chain((1..=mesh.surfaces.len() as u32).map(|id| {
             let m = mesh.material_of(id);
-            GpuSurface { kd: m.kd.extend(0.0), ke: m.ke.extend(if m.is_emitter() { 1.0 } else { 0.0 }) }
+            let group = lights.surface_group.get(&id).map_or(0.0, |&g| g as f32 + 1.0);
+            GpuSurface { kd: m.kd.extend(0.0), ke: m.ke.extend(group) }
         }))
         .collect()
 }

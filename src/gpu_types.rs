@@ -21,7 +21,8 @@ pub struct Vertex {
 pub struct GpuSurface {
     /// Albedo `Kd` (rgb), w unused.
     pub kd: Vec4,
-    /// Emitted radiance `Ke` (rgb); w = 1 for an emitter (one-sided: front face only), else 0.
+    /// Emitted radiance `Ke` (rgb); w = its light group + 1 for an emitter (one-sided: front face only), else
+    /// 0.
     pub ke: Vec4,
 }
 
@@ -32,16 +33,80 @@ pub struct GBufferPush {
     pub view_proj: Mat4,
 }
 
-/// One view of one sensor (paper §III-E): where it looks and which layer it draws into.
+/// One view of one sensor (paper §III-E): where it looks, what it keeps, and which layer it draws into.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSensorView {
     pub view_proj: Mat4,
-    /// Plane (n, −n·origin): geometry below it is clipped (hemicube side faces), `(0,0,0,1)` clips nothing.
-    pub clip_plane: Vec4,
-    /// Layer of the sensor-map array this view writes.
+    /// Planes `(m, d)` keeping `m·p + d ≥ 0`: the horizon `(n, −n·origin)` for hemicube side faces and zoom
+    /// views, the frustum's four sides for a frustum sensor's zoom views; `(0,0,0,1)` clips nothing.
+    pub clip: [Vec4; 4],
+    /// Layer of the sensor-map array this view writes (within its sensor until a strategy places it).
     pub layer: u32,
-    pub _pad: [u32; 3],
+    /// [`VIEW_EMITTERS_ONLY`] or 0.
+    pub flags: u32,
+    pub _pad: [u32; 2],
+}
+
+/// A view that draws only the emitters (the unoccluded half of a zoom pair).
+pub const VIEW_EMITTERS_ONLY: u32 = 1;
+
+/// What the reduction needs of one sensor of a batch: where it sits and its domain.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSensor {
+    /// xyz: the sensor's origin; w: the frustum's half-width `tan(fov/2)`, 0 for the whole hemisphere.
+    pub origin: Vec4,
+    /// The frame `(t, b, n)`; w unused.
+    pub t: Vec4,
+    pub b: Vec4,
+    pub n: Vec4,
+}
+
+/// A sensor's zoom view of one light group: the square view its visibility is measured in.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuZoom {
+    /// Unit axes of the view; `right.w` = tan of half its field of view, `forward.w` = 1 where the group
+    /// can be seen at all (else the group sends nothing and the view is empty).
+    pub right: Vec4,
+    pub up: Vec4,
+    pub forward: Vec4,
+}
+
+/// An emitting triangle, group by group (see `light::groups`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitter {
+    /// Vertices, counter-clockwise seen from the emitting front; w unused.
+    pub v0: Vec4,
+    pub v1: Vec4,
+    pub v2: Vec4,
+    /// Emitted radiance; w unused.
+    pub ke: Vec4,
+}
+
+/// A light group's range of emitters.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuLightGroup {
+    pub first: u32,
+    pub count: u32,
+    pub _pad: [u32; 2],
+}
+
+/// Light groups a sensor measures at most (`light::groups::MAX_GROUPS`; fixed here for the shaders).
+pub const MAX_GROUPS: usize = 8;
+
+/// What the reduction reports of one sensor, for the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSensorResult {
+    /// R; w = [`radiance_state::SENSED`].
+    pub r: Vec4,
+    /// Visibility of each light group (visible over unoccluded weighted coverage of its zoom view); −1 where
+    /// the group sends this sensor nothing.
+    pub visibility: [f32; MAX_GROUPS],
 }
 
 /// Push constants of the sensor-map pass.
@@ -57,7 +122,10 @@ pub struct SensorPush {
     /// Tiles per row and rows of the atlas strategy (0 otherwise).
     pub atlas_columns: u32,
     pub atlas_rows: u32,
-    pub _pad: [u32; 3],
+    /// 1: the exact estimator (emitter fronts leave 0 and their group in the map; their light is computed
+    /// exactly); 0: the paper's (emitter fronts leave `Ke`).
+    pub exact: u32,
+    pub _pad: [u32; 2],
 }
 
 /// Push constants of the reduction: the map geometry (workgroup i reduces sensor i of the batch).
@@ -66,11 +134,15 @@ pub struct SensorPush {
 pub struct ReducePush {
     /// Sensor map side, texels.
     pub rd: u32,
-    /// Layers per sensor (1 frustum, 3 hemicube).
+    /// Layers per sensor: its main layers (1 frustum, 3 hemicube), then a zoom pair per light group.
     pub layers: u32,
+    /// The main layers, summed with the precomputed weights.
+    pub main_layers: u32,
     /// 0: sensor maps are layers of a 2D array. Otherwise tiles of one atlas with this many per row.
     pub atlas_columns: u32,
-    pub _pad: u32,
+    /// Light groups measured (0: the paper's estimator).
+    pub groups: u32,
+    pub _pad: [u32; 3],
 }
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).
@@ -107,13 +179,22 @@ pub mod radiance_state {
 }
 
 impl GpuSensorView {
-    pub fn new(view_proj: Mat4, clip_plane: Option<Vec4>, layer: u32) -> Self {
-        Self { view_proj, clip_plane: clip_plane.unwrap_or(Vec4::W), layer, _pad: [0; 3] }
+    /// A view of the whole scene clipped by `clip` (at most 4 planes).
+    pub fn new(view_proj: Mat4, clip: &[Vec4], layer: u32) -> Self {
+        let mut planes = [Vec4::W; 4];
+        planes[..clip.len()].copy_from_slice(clip);
+        Self { view_proj, clip: planes, layer, flags: 0, _pad: [0; 2] }
     }
 
-    /// A view that draws nothing (its clip plane rejects every point): fills unused multiview slots.
+    /// A view that draws nothing (its clip plane rejects every point): fills unused multiview slots and the
+    /// zoom views of groups a sensor cannot see.
     pub fn empty(layer: u32) -> Self {
-        Self { view_proj: Mat4::IDENTITY, clip_plane: -Vec4::W, layer, _pad: [0; 3] }
+        Self { view_proj: Mat4::IDENTITY, clip: [-Vec4::W, Vec4::W, Vec4::W, Vec4::W], layer, flags: 0, _pad: [0; 2] }
+    }
+
+    pub fn emitters_only(mut self) -> Self {
+        self.flags |= VIEW_EMITTERS_ONLY;
+        self
     }
 }
 

@@ -20,10 +20,33 @@ pub const DEFAULT_TILE: u32 = 16;
 pub const DEFAULT_DRADIANCE: f32 = 0.2;
 pub const DEFAULT_FILTER_RADIUS: u32 = 2;
 pub const DEFAULT_EXPOSURE: f32 = 0.0;
+pub const DEFAULT_ESTIMATOR: EstimatorKind = EstimatorKind::Exact;
+
+/// How R is estimated from a sensor's maps (docs/DESIGN.md §2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EstimatorKind {
+    /// The emitters' unoccluded light in closed form, only their visibility read from the maps (zoom views
+    /// per light group); the rest as rasterised.
+    #[default]
+    Exact,
+    /// The paper's (its eq. 3): every texel's Ck summed, emitters included; what `metrics` reproduces.
+    Paper,
+}
+
+impl fmt::Display for EstimatorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Exact => "exact",
+            Self::Paper => "paper",
+        })
+    }
+}
 
 /// A user-settable parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Param {
+    Estimator,
     Sensor,
     Fov,
     Epsilon,
@@ -40,6 +63,7 @@ impl Param {
     /// The command-line flag.
     pub fn flag(self) -> &'static str {
         match self {
+            Self::Estimator => "--estimator",
             Self::Sensor => "--sensor",
             Self::Fov => "--fov",
             Self::Epsilon => "--epsilon",
@@ -56,6 +80,7 @@ impl Param {
     /// The key in a scene file's `[render]` table.
     pub fn key(self) -> &'static str {
         match self {
+            Self::Estimator => "estimator",
             Self::Sensor => "sensor",
             Self::Fov => "fov_deg",
             Self::Epsilon => "epsilon",
@@ -111,6 +136,7 @@ impl fmt::Display for ParamError {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Overrides {
+    pub estimator: Option<EstimatorKind>,
     pub sensor: Option<SensorShape>,
     pub fov_deg: Option<f32>,
     pub epsilon: Option<f32>,
@@ -209,6 +235,8 @@ pub struct FrameParams {
 /// Everything `render` resolves from flags, the scene file and defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderParams {
+    /// How R is estimated from the maps.
+    pub estimator_kind: EstimatorKind,
     pub estimator: EstimatorParams,
     /// rd: sensor map side in texels, 2 … the device's largest image side (even for hemicubes). Noise falls
     /// and cost grows roughly with rd²; 64–256 typical (the paper: 256).
@@ -247,6 +275,7 @@ impl RenderParams {
                 flags.$field.or(scene.$field).unwrap_or($default)
             }};
         }
+        let estimator_kind = resolve!(estimator, Param::Estimator, DEFAULT_ESTIMATOR);
         let shape = resolve!(sensor, Param::Sensor, DEFAULT_SENSOR);
         let fov = resolve!(fov_deg, Param::Fov, DEFAULT_FOV_DEG);
         let epsilon = resolve!(epsilon, Param::Epsilon, DEFAULT_EPSILON);
@@ -258,6 +287,7 @@ impl RenderParams {
         let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
         let sensor = SensorKind::new(shape, fov);
         let params = Self {
+            estimator_kind,
             estimator: EstimatorParams { sensor, epsilon, background },
             sensor_size,
             tile,

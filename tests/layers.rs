@@ -21,13 +21,25 @@ const RULES: &[(&str, &[&str])] = &[
     // The oracle: CPU only, never a GPU pass.
     ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
-    ("strategy", &["sensors", "vk", "output", "shaders"]),
+    ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.
-    ("gpu_scene", &["vk", "scene", "gpu_types"]),
-    ("passes", &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders"]),
+    ("gpu_scene", &["vk", "scene", "gpu_types", "light"]),
+    ("passes", &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light"]),
     (
         "renderer",
-        &["vk", "scene", "gbuffer", "sensors", "params", "gpu_types", "gpu_scene", "passes", "strategy", "shaders"],
+        &[
+            "vk",
+            "scene",
+            "gbuffer",
+            "sensors",
+            "params",
+            "gpu_types",
+            "gpu_scene",
+            "passes",
+            "strategy",
+            "shaders",
+            "light",
+        ],
     ),
     // Users of the renderer.
     ("bench", &["vk", "scene", "params", "passes", "renderer", "strategy", "sensors"]),

@@ -4,7 +4,10 @@
 use std::collections::HashMap;
 use std::mem::offset_of;
 
-use sensorlight::gpu_types::{GBufferPush, GpuQuad, GpuSensorView, GpuSurface, ImagePush, ReducePush, SensorPush};
+use sensorlight::gpu_types::{
+    GBufferPush, GpuEmitter, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom,
+    ImagePush, ReducePush, SensorPush,
+};
 use sensorlight::shaders;
 
 const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
@@ -79,11 +82,20 @@ fn shared_structs_match_glsl() {
     let rust = [
         (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
-        (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip_plane, layer, _pad)),
-        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, atlas_columns, atlas_rows, _pad)),
-        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, atlas_columns, _pad)),
+        (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, layer, flags, _pad)),
+        (
+            3,
+            "SensorPush",
+            rust_layout!(SensorPush: epsilon, first_view, layer_base, atlas_columns, atlas_rows, exact, _pad),
+        ),
+        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, main_layers, atlas_columns, groups, _pad)),
         (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
         (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),
+        (7, "GpuSensor", rust_layout!(GpuSensor: origin, t, b, n)),
+        (8, "GpuZoom", rust_layout!(GpuZoom: right, up, forward)),
+        (9, "GpuEmitter", rust_layout!(GpuEmitter: v0, v1, v2, ke)),
+        (10, "GpuLightGroup", rust_layout!(GpuLightGroup: first, count, _pad)),
+        (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

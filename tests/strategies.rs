@@ -8,23 +8,32 @@ mod common;
 use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
-use sensorlight::params::FrameParams;
+use sensorlight::params::{EstimatorKind, FrameParams};
 use sensorlight::passes::sensor_maps::{StrategyDesc, unsupported};
-use sensorlight::renderer::{self, Renderer, probe_pixels, sensor_bytes};
+use sensorlight::renderer::{self, Renderer, probe_pixels};
 use sensorlight::scene::ImageSize;
 use sensorlight::sensors::SensorKind;
+use sensorlight::sensors::layout::SensorLayout;
 use sensorlight::strategy::{self, Cache, CheckResult, Event, StrategyKind, StrategyRequest, relative_difference};
 use sensorlight::vk::Device;
 
 const HEMICUBE: SensorKind = SensorKind::Hemicube;
 const FRUSTUM: SensorKind = SensorKind::Frustum { fov_deg: 135.0 };
+const EXACT: EstimatorKind = EstimatorKind::Exact;
+const PAPER: EstimatorKind = EstimatorKind::Paper;
 
 /// 40 sensors on the built-in lightbox, in batches of 7 (full and partial batches), sensed by `kind`.
-fn probe(device: &Arc<Device>, kind: StrategyKind, sensor: SensorKind, rd: u32) -> Vec<Vec4> {
+fn probe(
+    device: &Arc<Device>,
+    kind: StrategyKind,
+    (sensor, estimator): (SensorKind, EstimatorKind),
+    rd: u32,
+) -> Vec<Vec4> {
     let size = ImageSize { width: 32, height: 32 };
     let scene = common::lightbox((size.width, size.height));
     let mut renderer = Renderer::builder(device, &scene, sensor, rd)
-        .memory_budget(Some(7 * sensor_bytes(sensor, rd)))
+        .estimator(estimator)
+        .max_batch(Some(7))
         .build_unchecked(kind)
         .unwrap();
     let pixels = probe_pixels(&renderer.gbuffer(size).unwrap().surface, 40);
@@ -34,57 +43,72 @@ fn probe(device: &Arc<Device>, kind: StrategyKind, sensor: SensorKind, rd: u32) 
 
 /// A strategy that passes its self-check gives per-sensor's R within float tolerance; one that fails it
 /// or cannot run is refused when asked for by name, with the reason.
-fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, rd: u32) {
+fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, estimator: EstimatorKind, rd: u32) {
     common::gpu(|device| {
-        let reference = probe(device, StrategyKind::PerSensor, sensor, rd);
+        let reference = probe(device, StrategyKind::PerSensor, (sensor, estimator), rd);
         assert!(reference.iter().all(|r| r.w == 1.0 && r.x > 0.0), "every probe sensor is sensed and lit");
         let scene = common::lightbox((8, 8));
-        let named = Renderer::builder(device, &scene, sensor, rd).strategy(StrategyRequest::Fixed(kind)).build();
-        let desc = StrategyDesc { sensor, rd, budget: 1 << 24, near: 0.0 };
+        let named = Renderer::builder(device, &scene, sensor, rd)
+            .estimator(estimator)
+            .strategy(StrategyRequest::Fixed(kind))
+            .build();
+        let groups = if estimator == EXACT { 1 } else { 0 }; // the lightbox has one light
+        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, rd, budget: 1 << 24 };
         if let Some(why) = unsupported(kind, device, &desc) {
             let message = named.err().map(|e| e.to_string()).unwrap_or_default();
             assert!(message.contains("cannot run") && message.contains(&why), "{kind}: {message}");
             return;
         }
-        if !renderer::self_check(device, sensor, kind).unwrap().passed {
+        if !renderer::self_check(device, sensor, estimator, kind).unwrap().passed {
             let message = named.err().map(|e| e.to_string()).unwrap_or_default();
             assert!(message.contains("disagrees with per-sensor"), "{kind}: {message}");
             return;
         }
         assert_eq!(named.unwrap().strategy(), kind, "a strategy that passes is used when asked for");
-        let difference = relative_difference(&probe(device, kind, sensor, rd), &reference);
-        assert!(difference <= 1e-5, "{kind}, {sensor}, rd {rd}: differs from per-sensor by {difference:.2e}");
+        let difference = relative_difference(&probe(device, kind, (sensor, estimator), rd), &reference);
+        assert!(
+            difference <= 1e-5,
+            "{kind}, {sensor}, {estimator}, rd {rd}: differs from per-sensor by {difference:.2e}"
+        );
     });
 }
 
 macro_rules! strategy_matrix {
-    ($($name:ident: $kind:ident, $sensor:expr, $rd:expr;)*) => {
+    ($($name:ident: $kind:ident, $sensor:expr, $estimator:expr, $rd:expr;)*) => {
         $(
             #[test]
             fn $name() {
-                agrees_with_per_sensor(StrategyKind::$kind, $sensor, $rd);
+                agrees_with_per_sensor(StrategyKind::$kind, $sensor, $estimator, $rd);
             }
         )*
     };
 }
 
 strategy_matrix! {
-    single_cb_hemicube_rd16: SingleCb, HEMICUBE, 16;
-    single_cb_hemicube_rd48: SingleCb, HEMICUBE, 48;
-    single_cb_frustum_rd16: SingleCb, FRUSTUM, 16;
-    single_cb_frustum_rd48: SingleCb, FRUSTUM, 48;
-    multiview_hemicube_rd16: Multiview, HEMICUBE, 16;
-    multiview_hemicube_rd48: Multiview, HEMICUBE, 48;
-    multiview_frustum_rd16: Multiview, FRUSTUM, 16;
-    multiview_frustum_rd48: Multiview, FRUSTUM, 48;
-    layered_hemicube_rd16: Layered, HEMICUBE, 16;
-    layered_hemicube_rd48: Layered, HEMICUBE, 48;
-    layered_frustum_rd16: Layered, FRUSTUM, 16;
-    layered_frustum_rd48: Layered, FRUSTUM, 48;
-    atlas_hemicube_rd16: Atlas, HEMICUBE, 16;
-    atlas_hemicube_rd48: Atlas, HEMICUBE, 48;
-    atlas_frustum_rd16: Atlas, FRUSTUM, 16;
-    atlas_frustum_rd48: Atlas, FRUSTUM, 48;
+    single_cb_hemicube_exact_rd16: SingleCb, HEMICUBE, EXACT, 16;
+    single_cb_hemicube_exact_rd48: SingleCb, HEMICUBE, EXACT, 48;
+    single_cb_frustum_exact_rd16: SingleCb, FRUSTUM, EXACT, 16;
+    single_cb_frustum_exact_rd48: SingleCb, FRUSTUM, EXACT, 48;
+    single_cb_hemicube_paper_rd16: SingleCb, HEMICUBE, PAPER, 16;
+    single_cb_frustum_paper_rd16: SingleCb, FRUSTUM, PAPER, 16;
+    multiview_hemicube_exact_rd16: Multiview, HEMICUBE, EXACT, 16;
+    multiview_hemicube_exact_rd48: Multiview, HEMICUBE, EXACT, 48;
+    multiview_frustum_exact_rd16: Multiview, FRUSTUM, EXACT, 16;
+    multiview_frustum_exact_rd48: Multiview, FRUSTUM, EXACT, 48;
+    multiview_hemicube_paper_rd16: Multiview, HEMICUBE, PAPER, 16;
+    multiview_frustum_paper_rd16: Multiview, FRUSTUM, PAPER, 16;
+    layered_hemicube_exact_rd16: Layered, HEMICUBE, EXACT, 16;
+    layered_hemicube_exact_rd48: Layered, HEMICUBE, EXACT, 48;
+    layered_frustum_exact_rd16: Layered, FRUSTUM, EXACT, 16;
+    layered_frustum_exact_rd48: Layered, FRUSTUM, EXACT, 48;
+    layered_hemicube_paper_rd16: Layered, HEMICUBE, PAPER, 16;
+    layered_frustum_paper_rd16: Layered, FRUSTUM, PAPER, 16;
+    atlas_hemicube_exact_rd16: Atlas, HEMICUBE, EXACT, 16;
+    atlas_hemicube_exact_rd48: Atlas, HEMICUBE, EXACT, 48;
+    atlas_frustum_exact_rd16: Atlas, FRUSTUM, EXACT, 16;
+    atlas_frustum_exact_rd48: Atlas, FRUSTUM, EXACT, 48;
+    atlas_hemicube_paper_rd16: Atlas, HEMICUBE, PAPER, 16;
+    atlas_frustum_paper_rd16: Atlas, FRUSTUM, PAPER, 16;
 }
 
 /// `auto` skips a strategy whose self-check failed, even where it would be the fastest, and says what it
@@ -99,7 +123,7 @@ fn auto_never_picks_a_strategy_that_failed_its_check() {
             // Every strategy fails but per-sensor and `failing`'s complement.
             for kind in StrategyKind::ALL {
                 let passed = kind == StrategyKind::PerSensor || (kind != failing && kind != StrategyKind::Multiview);
-                cache.record_check(&key, HEMICUBE, kind, CheckResult { max_difference: 0.0, passed });
+                cache.record_check(&key, HEMICUBE, EXACT, kind, CheckResult { max_difference: 0.0, passed });
             }
             let mut events = Vec::new();
             let mut record = |e: Event| events.push(e);

@@ -5,7 +5,7 @@ use anyhow::{Result, ensure};
 use clap::Args;
 use sensorlight::params::{
     DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG, DEFAULT_SENSOR,
-    DEFAULT_SENSOR_SIZE, DEFAULT_TILE, Overrides, SensorShape,
+    DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
 };
 use sensorlight::scene::{ImageSize, Scene};
 
@@ -56,6 +56,11 @@ pub struct RefinementFlags {
         )
     )]
     pub filter_radius: Option<u32>,
+}
+
+/// `--estimator`'s help, with the default of the command that shows it.
+pub fn estimator_help(default: EstimatorKind) -> String {
+    format!("How R is read from the sensor maps [default: {default}]")
 }
 
 /// The sensor map size: shared by `render` and `metrics`.

@@ -9,11 +9,11 @@ use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport};
 use sensorlight::outln;
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
-use sensorlight::params::RenderParams;
+use sensorlight::params::{DEFAULT_ESTIMATOR, EstimatorKind, RenderParams};
 use sensorlight::scene::{ImageSize, builtin};
 use sensorlight::strategy::StrategyKind;
 
-use super::args::EstimatorFlags;
+use super::args::{EstimatorFlags, estimator_help};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -32,6 +32,8 @@ pub struct BenchArgs {
     /// Timed runs per strategy and size (after one warm-up run), interleaved
     #[arg(long, default_value_t = 5)]
     repeat: usize,
+    #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
+    estimator_kind: Option<EstimatorKind>,
     #[command(flatten)]
     estimator: EstimatorFlags,
     /// Write the report as JSON
@@ -67,6 +69,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let estimator = params.estimator;
     let config = BenchConfig {
         scene,
+        estimator_kind: args.estimator_kind.unwrap_or(params.estimator_kind),
         size,
         estimator,
         sizes: args.sizes.clone(),

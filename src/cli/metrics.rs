@@ -8,17 +8,19 @@ use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 use indicatif::ProgressBar;
 use sensorlight::metrics::{self, MetricsConfig, report};
-use sensorlight::params::{Overrides, RenderParams, SensorShape};
+use sensorlight::params::{EstimatorKind, Overrides, RenderParams, SensorShape};
 use sensorlight::scene::{ImageSize, Scene};
 use sensorlight::strategy::{Cache, StrategyRequest};
 
-use super::args::{EstimatorFlags, RefinementFlags};
+use super::args::{EstimatorFlags, RefinementFlags, estimator_help};
 
 #[derive(Args)]
 pub struct MetricsArgs {
     /// Output directory (created if needed): CSV, Markdown, SVG and PNG per experiment, and metrics.json
     #[arg(short, long)]
     output: PathBuf,
+    #[arg(long, value_enum, help = estimator_help(EstimatorKind::Paper))]
+    estimator: Option<EstimatorKind>,
     /// Table I: sensor time against screen resolution (all three when none of these is given)
     #[arg(long)]
     table1: bool,
@@ -47,7 +49,7 @@ pub struct MetricsArgs {
     #[arg(long)]
     quick: bool,
     #[command(flatten)]
-    estimator: EstimatorFlags,
+    estimator_flags: EstimatorFlags,
     #[command(flatten)]
     refinement: RefinementFlags,
     /// Batching strategy: auto or a name (see `render --help`)
@@ -83,13 +85,18 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
     }
     let from_file = Overrides::from_scene_table(&scene_path, &scene.render)?;
     // The paper's sensor and map size unless the command line or the scene says otherwise.
+    // The paper's experiment: its estimator, sensor and map size unless told otherwise.
     let from_file = Overrides {
+        estimator: from_file.estimator.or(Some(EstimatorKind::Paper)),
         sensor: from_file.sensor.or(Some(SensorShape::Frustum)),
         sensor_size: from_file.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
         ..from_file
     };
-    let overrides =
-        args.refinement.overrides(Overrides { sensor_size: args.sensor_size, ..args.estimator.overrides() });
+    let overrides = args.refinement.overrides(Overrides {
+        estimator: args.estimator,
+        sensor_size: args.sensor_size,
+        ..args.estimator_flags.overrides()
+    });
     let params = RenderParams::resolve(Some((&scene_path, &from_file)), &overrides)?;
     let mut config = MetricsConfig::new(scene_path.display().to_string(), params.clone());
     if args.quick {

@@ -7,11 +7,11 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
-use sensorlight::params::{Overrides, RenderParams};
+use sensorlight::params::{DEFAULT_ESTIMATOR, EstimatorKind, Overrides, RenderParams};
 use sensorlight::renderer::{DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
 use sensorlight::strategy::{Cache, StrategyRequest};
 
-use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, sensor_size_help};
+use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, estimator_help, sensor_size_help};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -24,6 +24,8 @@ pub struct RenderArgs {
     estimator: EstimatorFlags,
     #[command(flatten)]
     image: ImageFlags,
+    #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
+    estimator_kind: Option<EstimatorKind>,
     #[arg(long, help = sensor_size_help())]
     sensor_size: Option<u32>,
     #[command(flatten)]
@@ -53,6 +55,7 @@ pub struct RenderArgs {
 impl RenderArgs {
     fn overrides(&self) -> Overrides {
         self.refinement.overrides(Overrides {
+            estimator: self.estimator_kind,
             sensor_size: self.sensor_size,
             exposure: self.image.exposure,
             ..self.estimator.overrides()
@@ -71,6 +74,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let mut cache = Cache::open_default();
         let mut report = super::report_strategy_event;
         let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
+            .estimator(params.estimator_kind)
             .memory_budget(args.memory_budget.map(|mib| mib << 20))
             .in_flight(args.in_flight)
             .strategy(args.strategy)

@@ -147,8 +147,11 @@ pub fn run(
             Some((r, renderer)) if r == rd => &mut current.insert((r, renderer)).1,
             previous => {
                 drop(previous); // free the previous map size's images first
-                let renderer =
-                    Renderer::builder(device, scene, sensor, rd).strategy(config.strategy).cache(cache).build()?;
+                let renderer = Renderer::builder(device, scene, sensor, rd)
+                    .estimator(config.params.estimator_kind)
+                    .strategy(config.strategy)
+                    .cache(cache)
+                    .build()?;
                 &mut current.insert((rd, renderer)).1
             }
         };

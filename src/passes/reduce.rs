@@ -1,7 +1,8 @@
-//! Reduction pass (docs/DESIGN.md §3 step 4): each sensor's layers → `R = (1/π) Σ Ck·w` at the sensor's pixel of
-//! the radiance map, and in the batch's results. Shader: `glsl/reduce.comp` (one workgroup per sensor, tree
-//! reduction in shared memory). One descriptor set per batch in flight, each bound to that batch's maps,
-//! pixel list and results.
+//! Reduction pass (docs/DESIGN.md §3 step 4): each sensor's layers → R at the sensor's pixel of the radiance
+//! map and in the batch's results: `(1/π) Σ Ck·w` over its main layers (the paper's estimator), plus, with
+//! the exact estimator, each light group's exact irradiance times its visibility read from the sensor's zoom
+//! pair. Shader: `glsl/reduce.comp` (one workgroup per sensor, tree reduction in shared memory). One
+//! descriptor set per batch in flight, each bound to that batch's maps, pixels, sensors and results.
 
 use std::sync::Arc;
 
@@ -9,17 +10,22 @@ use anyhow::Result;
 use ash::vk;
 
 use super::sensor_maps::MapLayout;
+use crate::gpu_scene::GpuScene;
 use crate::gpu_types::ReducePush;
-use crate::sensors::{SensorKind, weights};
+use crate::sensors::layout::SensorLayout;
+use crate::sensors::weights;
 use crate::shaders;
 use crate::vk::{Buffer, ComputeKernel, Device, Encoder, Image, transfer};
 
 pub struct ReducePass {
     kernel: ComputeKernel,
-    /// f32 weight per texel of one sensor's layers ([layer][row][col]).
+    /// f32 weight per texel of one sensor's main layers ([layer][row][col]).
     weights: Buffer,
+    /// The scene's emitters and light groups.
+    emitters: Arc<Buffer>,
+    groups: Arc<Buffer>,
     rd: u32,
-    layers: u32,
+    layout: SensorLayout,
 }
 
 /// What one batch's reduction reads and writes.
@@ -28,26 +34,27 @@ pub struct ReduceBindings<'a> {
     pub maps: &'a Image,
     /// Radiance-map pixel of each sensor of the batch (u32).
     pub pixels: &'a Buffer,
-    /// R of each sensor of the batch (vec4), for the host.
+    /// R and visibilities of each sensor of the batch (`GpuSensorResult`), for the host.
     pub results: &'a Buffer,
+    /// Each sensor's frame (`GpuSensor`) and its zoom views (`GpuZoom`, `[sensor][group]`).
+    pub sensors: &'a Buffer,
+    pub zooms: &'a Buffer,
     /// The radiance map of the current render.
     pub radiance: &'a Buffer,
 }
 
 impl ReducePass {
-    /// For sensors of `kind` and size `rd`, with one descriptor set for each of `slots` batches in flight.
-    pub fn new(device: &Arc<Device>, kind: SensorKind, rd: u32, slots: u32) -> Result<Self> {
+    /// For sensors of `layout` and size `rd` in `scene`, with one descriptor set for each of `slots` batches
+    /// in flight.
+    pub fn new(device: &Arc<Device>, scene: &GpuScene, layout: SensorLayout, rd: u32, slots: u32) -> Result<Self> {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let kernel = ComputeKernel::new(
-            device,
-            shaders::REDUCE_COMP,
-            &[(0, vk::DescriptorType::STORAGE_IMAGE), (1, storage), (2, storage), (3, storage), (4, storage)],
-            size_of::<ReducePush>() as u32,
-            slots,
-        )?;
-        let w: Vec<f32> = weights::sensor_weights(kind, rd).into_iter().map(|w| w as f32).collect();
+        let mut bindings = vec![(0, vk::DescriptorType::STORAGE_IMAGE)];
+        bindings.extend((1..=8).map(|b| (b, storage)));
+        let kernel =
+            ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
+        let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
         let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        Ok(Self { kernel, weights, rd, layers: kind.layers() })
+        Ok(Self { kernel, weights, emitters: scene.emitters.clone(), groups: scene.groups.clone(), rd, layout })
     }
 
     /// Binds slot `slot`'s resources (call while that slot's work is not in flight).
@@ -59,6 +66,10 @@ impl ReducePass {
             .storage_buffer(2, b.pixels)
             .storage_buffer(3, b.radiance)
             .storage_buffer(4, b.results)
+            .storage_buffer(5, b.sensors)
+            .storage_buffer(6, b.zooms)
+            .storage_buffer(7, &self.emitters)
+            .storage_buffer(8, &self.groups)
             .apply(device);
     }
 
@@ -68,7 +79,14 @@ impl ReducePass {
             MapLayout::Layers => 0,
             MapLayout::Atlas { columns } => columns,
         };
-        let push = ReducePush { rd: self.rd, layers: self.layers, atlas_columns, _pad: 0 };
+        let push = ReducePush {
+            rd: self.rd,
+            layers: self.layout.layers(),
+            main_layers: self.layout.main_layers(),
+            atlas_columns,
+            groups: self.layout.groups,
+            _pad: [0; 3],
+        };
         self.kernel.dispatch(enc, slot, &push, [count, 1, 1]);
     }
 }

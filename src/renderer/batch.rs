@@ -16,15 +16,17 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, ensure};
 use ash::vk;
-use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
+use crate::gpu_types::{GpuSensor, GpuSensorResult, GpuZoom};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
 use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
+use crate::scene::Aabb;
 use crate::sensors::frame::SensorFrame;
+use crate::sensors::views::BatchViews;
 use crate::strategy::StrategyKind;
 use crate::vk::{Access, Buffer, CommandSlot, Device, TimestampQueries, barrier};
 
@@ -47,12 +49,18 @@ pub struct BatchTimes {
     pub readback_bytes: u64,
 }
 
+/// Receives each completed batch: its sensors' pixels and what the reduction found there.
+pub(crate) type Deliver<'a> = &'a mut dyn FnMut(&[u32], &[GpuSensorResult]);
+
 struct Slot {
     commands: CommandSlot,
     maps: SlotMaps,
     /// Radiance-map pixel of each sensor of the batch, host-written.
     pixels: Buffer,
-    /// R of each sensor of the batch, device-written, host-read.
+    /// Each sensor's frame and its zoom views, host-written, for the reduction.
+    sensors: Buffer,
+    zooms: Buffer,
+    /// R and visibilities of each sensor of the batch (`GpuSensorResult`), device-written, host-read.
     results: Buffer,
     timestamps: Option<TimestampQueries>,
     /// Pixels of the batch in flight; empty when the slot is idle.
@@ -65,8 +73,12 @@ pub(crate) struct BatchRunner {
     next: usize,
     strategy: Box<dyn Strategy>,
     reduce: ReducePass,
-    /// How far a sensor sits above its surface (world units).
+    /// How far a sensor sits above its surface, and its views' near plane (world units).
     bias: f32,
+    near: f32,
+    desc: StrategyDesc,
+    /// Bounding box of each light group measured.
+    groups: Vec<Aabb>,
     /// The radiance map the reductions write: every batch submitted keeps it alive until its fence
     /// signals, so a render that fails with batches in flight cannot free it under the device.
     radiance: Option<Arc<Buffer>>,
@@ -75,36 +87,40 @@ pub(crate) struct BatchRunner {
 }
 
 impl BatchRunner {
-    /// A runner for `kind` with `in_flight` slots, each holding one batch as `desc` sizes it.
+    /// A runner for `kind` with `in_flight` slots, each holding one batch as `desc` sizes it; sensors sit
+    /// `bias` above their surfaces and see from `near` on.
     pub fn new(
         device: &Arc<Device>,
         scene: &GpuScene,
         kind: StrategyKind,
         desc: StrategyDesc,
         in_flight: u32,
-        bias: f32,
+        (bias, near): (f32, f32),
     ) -> Result<Self> {
         ensure!(in_flight >= 1, "at least one batch must be in flight");
         let strategy = sensor_maps::create(kind, device, scene, desc)?;
         let capacity = strategy.capacity() as u64;
-        let reduce = ReducePass::new(device, desc.sensor, desc.rd, in_flight)?;
+        let reduce = ReducePass::new(device, scene, desc.layout, desc.rd, in_flight)?;
+        let groups: Vec<Aabb> =
+            scene.lights.groups.iter().take(desc.layout.groups as usize).map(|g| g.bounds).collect();
+        let host = |name, bytes: u64, location| {
+            Buffer::new(device, name, bytes, vk::BufferUsageFlags::STORAGE_BUFFER, location)
+        };
         let slots = (0..in_flight)
             .map(|_| -> Result<Slot> {
                 Ok(Slot {
                     commands: CommandSlot::new(device)?,
                     maps: strategy.new_slot()?,
-                    pixels: Buffer::new(
-                        device,
-                        "sensor pixels",
-                        4 * capacity,
-                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                    pixels: host("sensor pixels", 4 * capacity, MemoryLocation::CpuToGpu)?,
+                    sensors: host("sensor frames", size_of::<GpuSensor>() as u64 * capacity, MemoryLocation::CpuToGpu)?,
+                    zooms: host(
+                        "sensor zoom views",
+                        size_of::<GpuZoom>() as u64 * capacity * groups.len() as u64,
                         MemoryLocation::CpuToGpu,
                     )?,
-                    results: Buffer::new(
-                        device,
+                    results: host(
                         "sensor results",
-                        16 * capacity,
-                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                        size_of::<GpuSensorResult>() as u64 * capacity,
                         MemoryLocation::GpuToCpu,
                     )?,
                     timestamps: TimestampQueries::new(device, TIMESTAMPS)?,
@@ -118,6 +134,9 @@ impl BatchRunner {
             strategy,
             reduce,
             bias,
+            near,
+            desc,
+            groups,
             radiance: None,
             device: device.clone(),
             times: BatchTimes::default(),
@@ -142,8 +161,14 @@ impl BatchRunner {
     pub fn bind(&mut self, radiance: &Arc<Buffer>) -> Result<()> {
         ensure!(self.slots.iter().all(|s| s.in_flight.is_empty()), "bind with batches in flight");
         for (i, slot) in self.slots.iter().enumerate() {
-            let bindings =
-                ReduceBindings { maps: &slot.maps.maps, pixels: &slot.pixels, results: &slot.results, radiance };
+            let bindings = ReduceBindings {
+                maps: &slot.maps.maps,
+                pixels: &slot.pixels,
+                results: &slot.results,
+                sensors: &slot.sensors,
+                zooms: &slot.zooms,
+                radiance,
+            };
             self.reduce.bind(&self.device, i, &bindings);
         }
         self.radiance = Some(radiance.clone());
@@ -152,14 +177,8 @@ impl BatchRunner {
     }
 
     /// Senses a sensor at each of `pixels` (indices into `g`) in batches, handing each completed batch's
-    /// pixels and R to `deliver`. Returns with up to all slots' batches still in flight.
-    pub fn sense(
-        &mut self,
-        g: &GBufferData,
-        pixels: &[u32],
-        ck: CkParams,
-        deliver: &mut dyn FnMut(&[u32], &[Vec4]),
-    ) -> Result<()> {
+    /// pixels and results to `deliver`. Returns with up to all slots' batches still in flight.
+    pub fn sense(&mut self, g: &GBufferData, pixels: &[u32], ck: CkParams, deliver: Deliver<'_>) -> Result<()> {
         let radiance = self.radiance.clone().context("sense before bind: no radiance map to write")?;
         for chunk in pixels.chunks(self.capacity() as usize) {
             let index = self.next;
@@ -173,15 +192,18 @@ impl BatchRunner {
                     SensorFrame::new(g.position[i as usize].truncate(), g.normal[i as usize].truncate(), self.bias)
                 })
                 .collect();
+            let views = BatchViews::new(&frames, &self.desc.layout, self.near, &self.groups, self.desc.rd);
             let (strategy, reduce) = (&self.strategy, &self.reduce);
             let slot = &mut self.slots[index];
             slot.pixels.write(0, chunk)?;
+            slot.sensors.write(0, &views.sensors)?;
+            slot.zooms.write(0, &views.zooms)?;
             let (maps, timestamps) = (&mut slot.maps, &slot.timestamps);
             slot.commands.record(|enc| {
                 let stamp = |query, stage| timestamps.iter().for_each(|t| enc.timestamp(t, query, stage));
                 timestamps.iter().for_each(|t| enc.reset_queries(t));
                 stamp(0, vk::PipelineStageFlags::TOP_OF_PIPE);
-                strategy.record(enc, maps, &frames, ck)?;
+                strategy.record(enc, maps, &views, ck)?;
                 stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 barrier::global(enc, &[Access::ColorAttachmentWrite], &[Access::ComputeRead]);
                 reduce.record(enc, index, strategy.map_layout(), chunk.len() as u32);
@@ -200,7 +222,7 @@ impl BatchRunner {
     }
 
     /// Waits for every batch in flight, handing its results to `deliver`.
-    pub fn drain(&mut self, deliver: &mut dyn FnMut(&[u32], &[Vec4])) -> Result<()> {
+    pub fn drain(&mut self, deliver: Deliver<'_>) -> Result<()> {
         // Oldest first: the slot after the last one used.
         for k in 0..self.slots.len() {
             self.retire((self.next + k) % self.slots.len(), deliver)?;
@@ -209,14 +231,14 @@ impl BatchRunner {
     }
 
     /// Waits for slot `index`'s batch, if any, and delivers its results and times.
-    fn retire(&mut self, index: usize, deliver: &mut dyn FnMut(&[u32], &[Vec4])) -> Result<()> {
+    fn retire(&mut self, index: usize, deliver: Deliver<'_>) -> Result<()> {
         let slot = &mut self.slots[index];
         self.times.host_wait += slot.commands.wait()?;
         if slot.in_flight.is_empty() {
             return Ok(());
         }
         let pixels = std::mem::take(&mut slot.in_flight);
-        let r: Vec<Vec4> = slot.results.read(pixels.len())?;
+        let r: Vec<GpuSensorResult> = slot.results.read(pixels.len())?;
         self.times.readback_bytes += size_of_val(r.as_slice()) as u64;
         if let Some(t) = slot.timestamps.as_ref().map(TimestampQueries::read_seconds).transpose()?.flatten() {
             let add = |total: &mut Option<Duration>, seconds: f64| {
@@ -241,8 +263,14 @@ impl BatchRunner {
         let pixels: Vec<u32> = (0..count).collect();
         let mut list = Buffer::new(&self.device, "scratch pixels", 4 * count as u64, usage, MemoryLocation::CpuToGpu)?;
         list.write(0, &pixels)?;
-        let bindings =
-            ReduceBindings { maps: &slot.maps.maps, pixels: &list, results: &slot.results, radiance: &scratch };
+        let bindings = ReduceBindings {
+            maps: &slot.maps.maps,
+            pixels: &list,
+            results: &slot.results,
+            sensors: &slot.sensors,
+            zooms: &slot.zooms,
+            radiance: &scratch,
+        };
         self.reduce.bind(&self.device, 0, &bindings);
         self.radiance = None; // slot 0 no longer writes the bound map: bind again before sensing
         let layout = self.strategy.map_layout();

@@ -26,7 +26,9 @@ pub use stats::{RenderStats, RenderTimes};
 
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
-use crate::params::{FrameParams, Param, ParamError};
+use crate::gpu_types::GpuSensorResult;
+use crate::light::groups::Lights;
+use crate::params::{EstimatorKind, FrameParams, Param, ParamError};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
@@ -35,6 +37,7 @@ use crate::passes::sensor_maps::{CkParams, StrategyDesc, TEXEL_BYTES};
 use crate::scene::{Camera, ImageSize, Scene};
 use crate::sensors::SensorKind;
 use crate::sensors::frame;
+use crate::sensors::layout::SensorLayout;
 use crate::sensors::refine::Refinement;
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
@@ -58,14 +61,38 @@ pub const DEFAULT_IN_FLIGHT: u32 = 2;
 /// render ([`FrameParams`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RendererConfig {
+    /// How R is estimated: the exact estimator adds a zoom pair of layers per light group.
+    pub estimator: EstimatorKind,
     pub sensor: SensorKind,
     /// rd: sensor map side in texels (see `params::RenderParams::sensor_size`).
     pub sensor_size: u32,
     /// Bytes for one batch's sensor maps and depth; `None`: [`default_memory_budget`].
     pub memory_budget: Option<u64>,
+    /// At most this many sensors per batch, whatever the budget (the self-check's partial batches, tests).
+    pub max_batch: Option<u32>,
     /// Batches in flight, ≥ 1 (each has its own maps: memory grows with it).
     pub in_flight: u32,
     pub strategy: StrategyRequest,
+}
+
+impl RendererConfig {
+    /// The layers one sensor occupies with the scene's `lights`: the main layers, and with the exact
+    /// estimator a zoom pair per light group.
+    pub fn layout(&self, lights: &Lights) -> SensorLayout {
+        let groups = match self.estimator {
+            EstimatorKind::Exact => lights.groups.len() as u32,
+            EstimatorKind::Paper => 0,
+        };
+        SensorLayout { kind: self.sensor, groups }
+    }
+
+    /// Bytes for one batch's maps and depth, sensors of `layout`: at most `max_batch` sensors' worth, else
+    /// the memory budget.
+    fn batch_budget(&self, device: &Device, layout: &SensorLayout) -> u64 {
+        let per_sensor = layout.layers() as u64 * (self.sensor_size as u64).pow(2) * TEXEL_BYTES;
+        let budget = self.memory_budget.unwrap_or_else(|| default_memory_budget(device, self.in_flight));
+        self.max_batch.map_or(budget, |n| budget.min(n as u64 * per_sensor))
+    }
 }
 
 /// Budget for one batch's sensor maps when none is given: together, the batches in flight use an eighth
@@ -90,6 +117,12 @@ impl<'a> RendererBuilder<'a> {
         self
     }
 
+    /// At most `sensors` per batch (e.g. to have full and partial batches on a small probe).
+    pub fn max_batch(mut self, sensors: Option<u32>) -> Self {
+        self.config.max_batch = sensors;
+        self
+    }
+
     pub fn in_flight(mut self, batches: u32) -> Self {
         self.config.in_flight = batches;
         self
@@ -97,6 +130,11 @@ impl<'a> RendererBuilder<'a> {
 
     pub fn strategy(mut self, request: StrategyRequest) -> Self {
         self.config.strategy = request;
+        self
+    }
+
+    pub fn estimator(mut self, estimator: EstimatorKind) -> Self {
+        self.config.estimator = estimator;
         self
     }
 
@@ -116,14 +154,15 @@ impl<'a> RendererBuilder<'a> {
     pub fn build(self) -> Result<Renderer> {
         let Self { device, scene, config, cache, events } = self;
         check_size(device, &config)?;
-        let budget = config.memory_budget.unwrap_or_else(|| default_memory_budget(device, config.in_flight));
+        let budget = config.batch_budget(device, &config.layout(&Lights::new(&scene.mesh)));
         let mut own_cache = Cache::in_memory();
         let cache = cache.unwrap_or(&mut own_cache);
         let mut ignore = |_| ();
         let events = events.unwrap_or(&mut ignore);
         let choice = {
-            let mut prober = probe::ProbeRenderer::new(device, config.sensor, budget, config.in_flight);
-            strategy::choose(&mut prober, config.sensor, config.sensor_size, budget, config.strategy, cache, events)?
+            let mut prober = probe::ProbeRenderer::new(device, &config, budget);
+            let (sensor, rd) = (config.sensor, config.sensor_size);
+            strategy::choose(&mut prober, sensor, config.estimator, rd, budget, config.strategy, cache, events)?
         };
         Renderer::new(device, scene, config, choice)
     }
@@ -137,10 +176,25 @@ impl<'a> RendererBuilder<'a> {
     }
 }
 
-/// Self-checks `kind` against `per-sensor` on the probe (see [`crate::strategy`]), on `device`.
-pub fn self_check(device: &Arc<Device>, sensor: SensorKind, kind: StrategyKind) -> Result<strategy::CheckResult> {
+/// Self-checks `kind` against `per-sensor` on the probe (see [`crate::strategy`]), on `device`, for sensors
+/// of `sensor` with the `estimator`.
+pub fn self_check(
+    device: &Arc<Device>,
+    sensor: SensorKind,
+    estimator: EstimatorKind,
+    kind: StrategyKind,
+) -> Result<strategy::CheckResult> {
+    let config = RendererConfig {
+        estimator,
+        sensor,
+        sensor_size: strategy::CHECK_RD,
+        memory_budget: None,
+        max_batch: None,
+        in_flight: DEFAULT_IN_FLIGHT,
+        strategy: StrategyRequest::Fixed(kind),
+    };
     let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
-    strategy::self_check(&mut probe::ProbeRenderer::new(device, sensor, budget, DEFAULT_IN_FLIGHT), kind)
+    strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget), kind)
 }
 
 /// The sensor size against the device's largest image and framebuffer side.
@@ -200,9 +254,11 @@ impl Renderer {
         sensor_size: u32,
     ) -> RendererBuilder<'a> {
         let config = RendererConfig {
+            estimator: EstimatorKind::default(),
             sensor,
             sensor_size,
             memory_budget: None,
+            max_batch: None,
             in_flight: DEFAULT_IN_FLIGHT,
             strategy: StrategyRequest::Auto,
         };
@@ -212,11 +268,12 @@ impl Renderer {
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
         let scale = scene.mesh.scale();
         let gpu_scene = GpuScene::upload(device, scene)?;
-        let budget = config.memory_budget.unwrap_or_else(|| default_memory_budget(device, config.in_flight));
-        let desc = StrategyDesc { sensor: config.sensor, rd: config.sensor_size, budget, near: frame::NEAR * scale };
-        let bias = frame::BIAS * scale;
+        let layout = config.layout(&gpu_scene.lights);
+        let budget = config.batch_budget(device, &layout);
+        let desc = StrategyDesc { layout, rd: config.sensor_size, budget };
+        let offsets = (frame::BIAS * scale, frame::NEAR * scale);
         Ok(Self {
-            runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, bias)?,
+            runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
             compose: ComposePass::new(device)?,
@@ -268,7 +325,8 @@ impl Renderer {
         let radiance = Arc::new(map_buffer(&self.device, "radiance map", size)?);
         self.runner.bind(&radiance)?;
         let mut r = vec![Vec4::ZERO; g.surface.len()];
-        let mut deliver = |p: &[u32], values: &[Vec4]| p.iter().zip(values).for_each(|(&i, &v)| r[i as usize] = v);
+        let mut deliver =
+            |p: &[u32], found: &[GpuSensorResult]| p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
         let start = Instant::now();
         let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
         self.runner.sense(&g, pixels, ck, &mut deliver)?;
@@ -314,8 +372,8 @@ impl Renderer {
             if !pending.is_empty() {
                 progress.queued(pending.len() as u64);
                 let read_before = self.runner.times.readback_bytes;
-                let mut deliver = |p: &[u32], values: &[Vec4]| {
-                    p.iter().zip(values).for_each(|(&i, &v)| r[i as usize] = v);
+                let mut deliver = |p: &[u32], found: &[GpuSensorResult]| {
+                    p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
                     progress.done(p.len() as u64);
                 };
                 self.runner.sense(&g, &pending, ck, &mut deliver)?;
@@ -366,11 +424,6 @@ impl Renderer {
         );
         Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
     }
-}
-
-/// Bytes of one sensor's maps and depth at `rd`: what a memory budget is divided by.
-pub fn sensor_bytes(sensor: SensorKind, rd: u32) -> u64 {
-    sensor.layers() as u64 * (rd as u64).pow(2) * TEXEL_BYTES
 }
 
 /// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.

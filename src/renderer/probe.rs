@@ -9,11 +9,11 @@ use std::time::Duration;
 use anyhow::Result;
 use glam::{Vec3, Vec4};
 
-use super::{Renderer, RendererConfig, sensor_bytes};
-use crate::params::FrameParams;
+use super::{Renderer, RendererConfig};
+use crate::params::{EstimatorKind, FrameParams};
 use crate::passes::sensor_maps::{self, StrategyDesc};
 use crate::scene::{ImageSize, NO_SURFACE, Scene, SurfaceId, builtin};
-use crate::sensors::SensorKind;
+use crate::sensors::layout::SensorLayout;
 use crate::strategy::{self, Prober, StrategyKind, StrategyRequest};
 use crate::vk::Device;
 
@@ -27,17 +27,17 @@ const PROBE_FRAME: FrameParams =
 pub(crate) struct ProbeRenderer<'a> {
     device: &'a Arc<Device>,
     scene: Scene,
-    sensor: SensorKind,
+    /// The renderer being built: its sensors, estimator and batches in flight.
+    config: RendererConfig,
     /// Bytes per batch when the probe does not ask for a batch size.
     budget: u64,
-    in_flight: u32,
     renderers: HashMap<(StrategyKind, u32, Option<u32>), Renderer>,
 }
 
 impl<'a> ProbeRenderer<'a> {
-    pub fn new(device: &'a Arc<Device>, sensor: SensorKind, budget: u64, in_flight: u32) -> Self {
+    pub fn new(device: &'a Arc<Device>, config: &RendererConfig, budget: u64) -> Self {
         let scene = builtin::lightbox(PROBE_SIZE);
-        Self { device, scene, sensor, budget, in_flight, renderers: HashMap::new() }
+        Self { device, scene, config: *config, budget, renderers: HashMap::new() }
     }
 }
 
@@ -51,8 +51,13 @@ impl Prober for ProbeRenderer<'_> {
     }
 
     fn unsupported(&self, kind: StrategyKind, rd: u32) -> Option<String> {
-        let desc = StrategyDesc { sensor: self.sensor, rd, budget: self.budget, near: 0.0 };
-        sensor_maps::unsupported(kind, self.device, &desc)
+        // The probe's lightbox has one light: the layout the strategy meets there.
+        let groups = match self.config.estimator {
+            EstimatorKind::Exact => 1,
+            EstimatorKind::Paper => 0,
+        };
+        let layout = SensorLayout { kind: self.config.sensor, groups };
+        sensor_maps::unsupported(kind, self.device, &StrategyDesc { layout, rd, budget: self.budget })
     }
 
     fn probe(
@@ -65,13 +70,12 @@ impl Prober for ProbeRenderer<'_> {
         let renderer = match self.renderers.entry((kind, rd, batch)) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => {
-                let budget = batch.map_or(self.budget, |b| b as u64 * sensor_bytes(self.sensor, rd));
                 let config = RendererConfig {
-                    sensor: self.sensor,
                     sensor_size: rd,
-                    memory_budget: Some(budget),
-                    in_flight: self.in_flight,
+                    memory_budget: Some(self.budget),
+                    max_batch: batch,
                     strategy: StrategyRequest::Fixed(kind),
+                    ..self.config
                 };
                 e.insert(Renderer::new(
                     self.device,

@@ -17,8 +17,49 @@
 //! The lower half of layer 1 is the −t face seen with `up = −n`, so its horizon also lies on the middle line
 //! and its zenith on the bottom edge. Every texel then covers the same solid angle as in a textbook
 //! hemicube of `rd × rd` front texels, and the sensor costs 3 layers instead of 5.
+//!
+//! With the exact estimator a sensor also has a pair of zoom layers per light group (`sensors::zoom`),
+//! after its main layers: the group's zoom view drawn with the whole scene, then with the emitters alone.
+//!
+//! ```text
+//!   | main 0 … main L−1 | group 0, scene | group 0, emitters | group 1, scene | group 1, emitters | … |
+//! ```
 
 use super::SensorKind;
+
+/// The layers one sensor occupies: its main layers, then a zoom pair per light group measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorLayout {
+    pub kind: SensorKind,
+    /// Light groups whose visibility the sensor measures (0: the paper's estimator).
+    pub groups: u32,
+}
+
+impl SensorLayout {
+    pub fn main_layers(&self) -> u32 {
+        self.kind.layers()
+    }
+
+    pub fn layers(&self) -> u32 {
+        self.main_layers() + 2 * self.groups
+    }
+
+    /// Views per sensor: the main ones and two per group.
+    pub fn views(&self) -> u32 {
+        self.kind.views() + 2 * self.groups
+    }
+
+    /// Layer of group `g`'s zoom view drawn with the whole scene (`emitters_only`: with the emitters alone).
+    pub fn zoom_layer(&self, g: u32, emitters_only: bool) -> u32 {
+        self.main_layers() + 2 * g + emitters_only as u32
+    }
+
+    /// The layer of each of a sensor's views, in their order: the main views, then each group's pair.
+    pub fn view_layers(&self) -> Vec<u32> {
+        let zooms = (0..self.groups).flat_map(|g| [self.zoom_layer(g, false), self.zoom_layer(g, true)]);
+        views(self.kind).iter().map(|v| v.layer).chain(zooms).collect()
+    }
+}
 
 /// What one layer holds; decides its weights.
 #[derive(Clone, Copy, Debug, PartialEq)]

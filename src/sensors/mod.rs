@@ -3,12 +3,16 @@
 //! - [`frame`]: where a sensor sits and how it is oriented, and the view of each of its faces;
 //! - [`layout`]: which layers of the sensor-map array a sensor's faces occupy;
 //! - [`weights`]: the projected solid angle of every texel, shared by the GPU reduction and the tests;
-//! - [`refine`]: where sensors go: the grid and its adaptive refinement.
+//! - [`refine`]: where sensors go: the grid and its adaptive refinement;
+//! - [`zoom`]: a sensor's zoom view of a light group, whose visibility it measures;
+//! - [`views`]: a batch of sensors' views and what the reduction needs to know of them.
 
 pub mod frame;
 pub mod layout;
 pub mod refine;
+pub mod views;
 pub mod weights;
+pub mod zoom;
 
 use std::fmt;
 

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{CheckResult, StrategyKind};
 use crate::output::atomic;
+use crate::params::EstimatorKind;
 use crate::sensors::SensorKind;
 use crate::vk::Adapter;
 
@@ -43,13 +44,26 @@ impl Cache {
         Self::default()
     }
 
-    pub(super) fn check(&self, device: &str, sensor: SensorKind, strategy: StrategyKind) -> Option<CheckResult> {
-        self.checks.get(&check_key(device, sensor, strategy)).copied()
+    pub(super) fn check(
+        &self,
+        device: &str,
+        sensor: SensorKind,
+        estimator: EstimatorKind,
+        strategy: StrategyKind,
+    ) -> Option<CheckResult> {
+        self.checks.get(&check_key(device, sensor, estimator, strategy)).copied()
     }
 
     /// Records a self-check result as if it had been run (e.g. to test that `auto` honours a failure).
-    pub fn record_check(&mut self, device: &str, sensor: SensorKind, strategy: StrategyKind, result: CheckResult) {
-        self.checks.insert(check_key(device, sensor, strategy), result);
+    pub fn record_check(
+        &mut self,
+        device: &str,
+        sensor: SensorKind,
+        estimator: EstimatorKind,
+        strategy: StrategyKind,
+        result: CheckResult,
+    ) {
+        self.checks.insert(check_key(device, sensor, estimator, strategy), result);
     }
 
     pub(super) fn choice(&self, key: &str) -> Option<StrategyKind> {
@@ -79,6 +93,6 @@ pub fn device_key(adapter: &Adapter) -> String {
     format!("{} | {} | {} {:016x}", adapter.name, adapter.driver, env!("CARGO_PKG_VERSION"), shaders)
 }
 
-fn check_key(device: &str, sensor: SensorKind, strategy: StrategyKind) -> String {
-    format!("{device} | {sensor} | {strategy}")
+fn check_key(device: &str, sensor: SensorKind, estimator: EstimatorKind, strategy: StrategyKind) -> String {
+    format!("{device} | {sensor} | {estimator} | {strategy}")
 }

@@ -6,6 +6,7 @@ use anyhow::{Result, bail};
 use glam::Vec4;
 
 use super::{CHECK_BATCH, CHECK_RD, CHECK_SENSORS, Cache, CheckResult, StrategyKind, StrategyRequest, measure_sensors};
+use crate::params::EstimatorKind;
 use crate::sensors::SensorKind;
 
 /// Renders the probe for the strategy module: implemented by the renderer.
@@ -53,11 +54,14 @@ pub fn self_check(prober: &mut dyn Prober, strategy: StrategyKind) -> Result<Che
     Ok(CheckResult::judge(&r, &reference))
 }
 
-/// The strategy to use for `sensor` sensors of size `rd` with `budget` bytes per batch: the requested one if
-/// it passes its self-check, else (auto) the fastest strategy that passes, measured on the probe at `rd`.
+/// The strategy to use for `sensor` sensors of size `rd` read by `estimator`, with `budget` bytes per batch:
+/// the requested one if it passes its self-check, else (auto) the fastest strategy that passes, measured on
+/// the probe at `rd`. The prober renders with the same sensor and estimator.
+#[allow(clippy::too_many_arguments)]
 pub fn choose(
     prober: &mut dyn Prober,
     sensor: SensorKind,
+    estimator: EstimatorKind,
     rd: u32,
     budget: u64,
     request: StrategyRequest,
@@ -69,7 +73,7 @@ pub fn choose(
         if let Some(why) = prober.unsupported(strategy, rd) {
             bail!("strategy {strategy} cannot run on {}: {why}", prober.device_name());
         }
-        let result = checked(prober, sensor, strategy, cache, events)?;
+        let result = checked(prober, (sensor, estimator), strategy, cache, events)?;
         if !result.passed {
             bail!(
                 "strategy {strategy} disagrees with per-sensor on {} (max difference {:.2e} of the brightest R); \
@@ -81,7 +85,7 @@ pub fn choose(
         return Ok(Choice { strategy, reason: "requested".into() });
     }
 
-    let choice_key = format!("{device} | {sensor} | rd {rd} | budget {budget}");
+    let choice_key = format!("{device} | {sensor} | {estimator} | rd {rd} | budget {budget}");
     if let Some(strategy) = cache.choice(&choice_key) {
         return Ok(Choice { strategy, reason: "auto: fastest correct strategy here, cached".into() });
     }
@@ -89,7 +93,7 @@ pub fn choose(
     for strategy in StrategyKind::ALL {
         if let Some(why) = prober.unsupported(strategy, rd) {
             events(Event::Unsupported { strategy, why });
-        } else if checked(prober, sensor, strategy, cache, events)?.passed {
+        } else if checked(prober, (sensor, estimator), strategy, cache, events)?.passed {
             candidates.push(strategy);
         }
     }
@@ -117,19 +121,19 @@ pub fn choose(
 /// `strategy`'s self-check result: from the cache, else run now and cached.
 fn checked(
     prober: &mut dyn Prober,
-    sensor: SensorKind,
+    (sensor, estimator): (SensorKind, EstimatorKind),
     strategy: StrategyKind,
     cache: &mut Cache,
     events: &mut dyn FnMut(Event),
 ) -> Result<CheckResult> {
     let device = prober.device_key();
-    if let Some(result) = cache.check(&device, sensor, strategy) {
+    if let Some(result) = cache.check(&device, sensor, estimator, strategy) {
         events(Event::Checked { strategy, result, cached: true });
         return Ok(result);
     }
     let result = self_check(prober, strategy)?;
     events(Event::Checked { strategy, result, cached: false });
-    cache.record_check(&device, sensor, strategy, result);
+    cache.record_check(&device, sensor, estimator, strategy, result);
     cache.save()?;
     Ok(result)
 }
@@ -182,8 +186,10 @@ mod tests {
         };
         let (mut cache, mut events) = (Cache::in_memory(), Vec::new());
         let sensor = SensorKind::Hemicube;
+        let exact = EstimatorKind::Exact;
         let choice =
-            choose(&mut fake, sensor, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |e| events.push(e)).unwrap();
+            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |e| events.push(e))
+                .unwrap();
         assert_eq!(choice.strategy, StrategyKind::Layered);
         assert!(events.iter().any(|e| matches!(e, Event::Unsupported { strategy: StrategyKind::Multiview, .. })));
         assert!(
@@ -194,13 +200,15 @@ mod tests {
         assert!(fake.probes.contains(&(StrategyKind::Atlas, CHECK_RD, Some(CHECK_BATCH))), "checked on the probe");
         // A second choice comes from the cache: nothing is rendered.
         fake.probes.clear();
-        let again = choose(&mut fake, sensor, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
+        let again =
+            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
         assert_eq!(again.strategy, StrategyKind::Layered);
         assert!(fake.probes.is_empty(), "{:?}", fake.probes);
         // A named strategy that failed its (cached) check is refused with the reason.
         let err = choose(
             &mut fake,
             sensor,
+            exact,
             64,
             1 << 20,
             StrategyRequest::Fixed(StrategyKind::Atlas),
@@ -213,6 +221,7 @@ mod tests {
         let err = choose(
             &mut fake,
             sensor,
+            exact,
             64,
             1 << 20,
             StrategyRequest::Fixed(StrategyKind::Multiview),

@@ -14,15 +14,13 @@ use ash::vk;
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
-use crate::sensors::frame::SensorFrame;
-use crate::sensors::layout::{ViewLayout, views};
+use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
 use crate::vk::{Device, Encoder};
 
 pub struct Atlas {
     pipeline: SensorPipeline,
-    layouts: Vec<ViewLayout>,
     desc: StrategyDesc,
     columns: u32,
     rows: u32,
@@ -47,8 +45,8 @@ impl Atlas {
         let tiles = capacity * layers;
         let columns = tiles.min(max_columns);
         let rows = tiles.div_ceil(columns);
-        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_ATLAS_VERT, 0)?;
-        Ok(Self { pipeline, layouts: views(desc.sensor), desc, columns, rows, capacity })
+        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_ATLAS_VERT, 0)?;
+        Ok(Self { pipeline, desc, columns, rows, capacity })
     }
 }
 
@@ -67,15 +65,15 @@ impl Strategy for Atlas {
 
     fn new_slot(&self) -> Result<SlotMaps> {
         let size = (self.columns * self.desc.rd, self.rows * self.desc.rd, 1);
-        let mut slot = SlotMaps::new(&self.pipeline, size, self.capacity as usize * self.layouts.len())?;
+        let mut slot = SlotMaps::new(&self.pipeline, size, self.capacity as usize * self.desc.layout.views() as usize)?;
         slot.framebuffers = vec![slot.whole_framebuffer(&self.pipeline)?];
         Ok(slot)
     }
 
-    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()> {
         let layers = self.desc.layers();
-        slot.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
-        let count = frames.len() as u32;
+        slot.write_views(batch, |i, layer| i * layers + layer)?;
+        let count = batch.len() as u32;
         // Only the rows of tiles this batch uses are cleared and drawn.
         let rows_used = (count * layers).div_ceil(self.columns);
         let area = vk::Extent2D { width: self.columns * self.desc.rd, height: rows_used * self.desc.rd };
@@ -86,7 +84,7 @@ impl Strategy for Atlas {
             atlas_rows: self.rows,
             ..Default::default()
         };
-        self.pipeline.draw(&pass, &push, count * self.layouts.len() as u32, 0);
+        self.pipeline.draw(&pass, &push, count * batch.per_sensor as u32, 0);
         Ok(())
     }
 }

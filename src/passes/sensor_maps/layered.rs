@@ -12,15 +12,13 @@ use anyhow::{Result, ensure};
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
-use crate::sensors::frame::SensorFrame;
-use crate::sensors::layout::{ViewLayout, views};
+use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
 use crate::vk::{Device, Encoder};
 
 pub struct Layered {
     pipeline: SensorPipeline,
-    layouts: Vec<ViewLayout>,
     desc: StrategyDesc,
     capacity: u32,
 }
@@ -32,8 +30,8 @@ impl Layered {
         let by_layers = limits.max_framebuffer_layers.min(limits.max_image_array_layers) / layers;
         ensure!(by_layers >= 1, "this device cannot render {layers} layers in one pass");
         let capacity = by_layers.min(desc.batch_limit(device)?);
-        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_LAYERED_VERT, 0)?;
-        Ok(Self { pipeline, layouts: views(desc.sensor), desc, capacity })
+        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_LAYERED_VERT, 0)?;
+        Ok(Self { pipeline, desc, capacity })
     }
 }
 
@@ -52,15 +50,16 @@ impl Strategy for Layered {
 
     fn new_slot(&self) -> Result<SlotMaps> {
         let (rd, layers) = (self.desc.rd, self.capacity * self.desc.layers());
-        let mut slot = SlotMaps::new(&self.pipeline, (rd, rd, layers), self.capacity as usize * self.layouts.len())?;
+        let views = self.capacity as usize * self.desc.layout.views() as usize;
+        let mut slot = SlotMaps::new(&self.pipeline, (rd, rd, layers), views)?;
         slot.framebuffers = vec![slot.whole_framebuffer(&self.pipeline)?];
         Ok(slot)
     }
 
-    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()> {
         let layers = self.desc.layers();
-        slot.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
-        let count = frames.len() as u32;
+        slot.write_views(batch, |i, layer| i * layers + layer)?;
+        let count = batch.len() as u32;
         // A smaller batch draws into a framebuffer over its own layers only, so that the others are not
         // cleared. The previous one's batch has completed (the runner waited for the slot): replacing it is safe.
         if count != self.capacity && slot.partial.as_ref().is_none_or(|p| p.0 != count) {
@@ -73,7 +72,7 @@ impl Strategy for Layered {
         };
         let pass = self.pipeline.begin(enc, slot, framebuffer, ck, None);
         let push = SensorPush { epsilon: ck.epsilon, ..Default::default() };
-        self.pipeline.draw(&pass, &push, count * self.layouts.len() as u32, 0);
+        self.pipeline.draw(&pass, &push, count * batch.per_sensor as u32, 0);
         Ok(())
     }
 }

@@ -29,9 +29,8 @@ use gpu_allocator::MemoryLocation;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::passes::{DEPTH_COMPARE, DEPTH_FORMAT};
-use crate::sensors::SensorKind;
-use crate::sensors::frame::SensorFrame;
-use crate::sensors::layout::ViewLayout;
+use crate::sensors::layout::SensorLayout;
+use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
 use crate::vk::{
@@ -70,25 +69,29 @@ pub trait Strategy {
     fn map_layout(&self) -> MapLayout;
     /// The resources of one batch in flight: its maps and what draws into them.
     fn new_slot(&self) -> Result<SlotMaps>;
-    /// Writes the views of `frames` (at most [`Strategy::capacity`]) into `slot` and records their maps.
-    /// The slot's previous batch has completed (the runner waited for it).
-    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()>;
+    /// Writes the views of `batch` (at most [`Strategy::capacity`] sensors) into `slot`, each placed in its
+    /// layer or tile, and records their maps. The slot's previous batch has completed (the runner waited).
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()>;
 }
 
 /// Everything a strategy needs to know to size itself.
 #[derive(Clone, Copy, Debug)]
 pub struct StrategyDesc {
-    pub sensor: SensorKind,
+    /// The layers of one sensor (and so whether the estimator is the exact one: it has light groups).
+    pub layout: SensorLayout,
     pub rd: u32,
     /// Bytes for one batch's maps and depth.
     pub budget: u64,
-    /// Near plane of the sensor views.
-    pub near: f32,
 }
 
 impl StrategyDesc {
     pub fn layers(&self) -> u32 {
-        self.sensor.layers()
+        self.layout.layers()
+    }
+
+    /// Whether emitter fronts leave 0 and their group in the maps (the exact estimator).
+    pub fn exact(&self) -> bool {
+        self.layout.groups > 0
     }
 
     /// Sensors one batch may hold: what the memory budget allows and one reduction dispatch can cover (at
@@ -109,8 +112,8 @@ impl StrategyDesc {
 /// Why `kind` cannot run on `device` for sensors described by `desc`, if it cannot.
 pub fn unsupported(kind: StrategyKind, device: &Device, desc: &StrategyDesc) -> Option<String> {
     let (l, f) = (&device.adapter.limits, &device.adapter.features);
-    if desc.sensor.layers() > 1 && !f.shader_clip_distance {
-        return Some("no clip distances (hemicube side faces need them)".into());
+    if !f.shader_clip_distance {
+        return Some("no clip distances (hemicube side faces and zoom views need them)".into());
     }
     match kind {
         StrategyKind::Layered | StrategyKind::PerSensor | StrategyKind::SingleCb if !f.shader_output_layer => {
@@ -227,35 +230,20 @@ impl SlotMaps {
         self.layer_framebuffer(pipeline, (0, layers), layers)
     }
 
+    /// The background's radiance, and alpha 0: no emitter's group (see `glsl/sensor.frag`).
     fn clears(background: Vec3) -> [vk::ClearValue; 2] {
         [
-            vk::ClearValue { color: vk::ClearColorValue { float32: background.extend(1.0).to_array() } },
+            vk::ClearValue { color: vk::ClearColorValue { float32: background.extend(0.0).to_array() } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ]
     }
 
-    /// Writes the views of `frames`, sensor-major, in [`crate::sensors::layout::views`] order; `slot(i,
-    /// view)` gives each view's `layer` field (the layer or tile it draws into).
-    fn write_views(
-        &mut self,
-        frames: &[SensorFrame],
-        layouts: &[ViewLayout],
-        near: f32,
-        slot: impl Fn(u32, &ViewLayout) -> u32,
-    ) -> Result<()> {
-        let views: Vec<GpuSensorView> = frames
-            .iter()
-            .enumerate()
-            .flat_map(|(i, frame)| {
-                let slot = &slot;
-                layouts.iter().map(move |v| {
-                    GpuSensorView::new(
-                        frame.view_proj(v, near),
-                        v.clip_horizon.then(|| frame.horizon()),
-                        slot(i as u32, v),
-                    )
-                })
-            })
+    /// Writes the views of `batch`, sensor-major, each in the layer or tile `place(sensor, layer within the
+    /// sensor)`.
+    fn write_views(&mut self, batch: &BatchViews, place: impl Fn(u32, u32) -> u32) -> Result<()> {
+        let place = &place;
+        let views: Vec<GpuSensorView> = (0..batch.len())
+            .flat_map(|i| batch.of(i).iter().map(move |v| GpuSensorView { layer: place(i as u32, v.layer), ..*v }))
             .collect();
         self.views.write(0, &views)
     }
@@ -271,12 +259,14 @@ struct SensorPipeline {
     vertices: Arc<Buffer>,
     vertex_count: u32,
     surfaces: Arc<Buffer>,
+    /// The exact estimator: emitter fronts leave 0 and their group.
+    exact: bool,
     device: Arc<Device>,
 }
 
 impl SensorPipeline {
     /// `view_mask` 0 for ordinary passes.
-    fn new(device: &Arc<Device>, scene: &GpuScene, vertex: &[u8], view_mask: u32) -> Result<Self> {
+    fn new(device: &Arc<Device>, scene: &GpuScene, desc: &StrategyDesc, vertex: &[u8], view_mask: u32) -> Result<Self> {
         let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let stage = vk::ShaderStageFlags::VERTEX;
@@ -306,6 +296,7 @@ impl SensorPipeline {
             vertices: scene.vertices.clone(),
             vertex_count: scene.vertex_count,
             surfaces: scene.surfaces.clone(),
+            exact: desc.exact(),
             device: device.clone(),
         })
     }
@@ -328,7 +319,7 @@ impl SensorPipeline {
 
     /// Draws the scene `instances` times starting at view `first_instance`.
     fn draw(&self, pass: &RenderPassScope<'_, '_>, push: &SensorPush, instances: u32, first_instance: u32) {
-        pass.push(&self.layout, push);
+        pass.push(&self.layout, &SensorPush { exact: self.exact as u32, ..*push });
         pass.draw(self.vertex_count, instances, 0, first_instance);
     }
 }

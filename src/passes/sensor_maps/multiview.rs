@@ -20,16 +20,15 @@ use anyhow::{Result, ensure};
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorView, SensorPush};
-use crate::sensors::frame::SensorFrame;
-use crate::sensors::layout::{ViewLayout, views};
+use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
 use crate::vk::{Device, Encoder};
 
 pub struct Multiview {
     pipeline: SensorPipeline,
-    /// For each layer of a sensor, the views that draw into it, in draw order.
-    per_layer: Vec<Vec<ViewLayout>>,
+    /// For each layer of a sensor, the indices of its views that draw into it, in draw order.
+    per_layer: Vec<Vec<usize>>,
     desc: StrategyDesc,
     /// Layers per group (bits in the view mask), sensors per group, and groups per batch.
     group_layers: u32,
@@ -48,11 +47,11 @@ impl Multiview {
         let groups = (limits.max_image_array_layers / group_layers)
             .min(desc.batch_limit(device)?.div_ceil(group_sensors))
             .max(1);
-        let layouts = views(desc.sensor);
-        let per_layer: Vec<Vec<ViewLayout>> =
-            (0..layers).map(|l| layouts.iter().copied().filter(|v| v.layer == l).collect()).collect();
+        let view_layers = desc.layout.view_layers();
+        let per_layer: Vec<Vec<usize>> =
+            (0..layers).map(|l| (0..view_layers.len()).filter(|&v| view_layers[v] == l).collect()).collect();
         let view_mask = if group_layers == 32 { u32::MAX } else { (1 << group_layers) - 1 };
-        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_MULTIVIEW_VERT, view_mask)?;
+        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_MULTIVIEW_VERT, view_mask)?;
         Ok(Self { pipeline, per_layer, desc, group_layers, group_sensors, groups })
     }
 
@@ -62,19 +61,17 @@ impl Multiview {
 
     /// Views, group-major then draw-major: entry `(g·draws + d)·k + j` is what draw d of group g shows in
     /// the group's layer j.
-    fn views(&self, frames: &[SensorFrame]) -> Vec<GpuSensorView> {
-        let (k, layers, near) = (self.group_layers, self.desc.layers(), self.desc.near);
-        let groups = (frames.len() as u32).div_ceil(self.group_sensors);
+    fn views(&self, batch: &BatchViews) -> Vec<GpuSensorView> {
+        let (k, layers) = (self.group_layers, self.desc.layers());
+        let groups = (batch.len() as u32).div_ceil(self.group_sensors);
         let mut out = Vec::with_capacity((groups * self.draws() * k) as usize);
         for g in 0..groups {
             for d in 0..self.draws() as usize {
                 for j in 0..k {
                     let sensor = (g * self.group_sensors + j / layers) as usize;
-                    let view = frames.get(sensor).zip(self.per_layer[(j % layers) as usize].get(d));
+                    let view = self.per_layer[(j % layers) as usize].get(d).filter(|_| sensor < batch.len());
                     out.push(match view {
-                        Some((frame, v)) => {
-                            GpuSensorView::new(frame.view_proj(v, near), v.clip_horizon.then(|| frame.horizon()), j)
-                        }
+                        Some(&v) => GpuSensorView { layer: j, ..batch.of(sensor)[v] },
                         None => GpuSensorView::empty(j),
                     });
                 }
@@ -107,9 +104,9 @@ impl Strategy for Multiview {
         Ok(slot)
     }
 
-    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
-        slot.views.write(0, &self.views(frames))?;
-        let groups = (frames.len() as u32).div_ceil(self.group_sensors);
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()> {
+        slot.views.write(0, &self.views(batch))?;
+        let groups = (batch.len() as u32).div_ceil(self.group_sensors);
         let (draws, k) = (self.draws(), self.group_layers);
         for g in 0..groups {
             let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[g as usize], ck, None);

@@ -9,15 +9,13 @@ use anyhow::{Result, ensure};
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::SensorPush;
-use crate::sensors::frame::SensorFrame;
-use crate::sensors::layout::{ViewLayout, views};
+use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
 use crate::vk::{Device, Encoder};
 
 pub struct PerSensor {
     pipeline: SensorPipeline,
-    layouts: Vec<ViewLayout>,
     desc: StrategyDesc,
     capacity: u32,
     /// `single-cb`: a batch of sensors per submission; else one.
@@ -31,8 +29,8 @@ impl PerSensor {
         ensure!(limits.max_framebuffer_layers >= layers, "this device cannot render {layers} layers in one pass");
         let capacity =
             if one_submission { (limits.max_image_array_layers / layers).min(desc.batch_limit(device)?) } else { 1 };
-        let pipeline = SensorPipeline::new(device, scene, shaders::SENSOR_LAYERED_VERT, 0)?;
-        Ok(Self { pipeline, layouts: views(desc.sensor), desc, capacity, one_submission })
+        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_LAYERED_VERT, 0)?;
+        Ok(Self { pipeline, desc, capacity, one_submission })
     }
 }
 
@@ -51,23 +49,20 @@ impl Strategy for PerSensor {
 
     fn new_slot(&self) -> Result<SlotMaps> {
         let (rd, layers) = (self.desc.rd, self.desc.layers());
-        let mut slot = SlotMaps::new(
-            &self.pipeline,
-            (rd, rd, self.capacity * layers),
-            self.capacity as usize * self.layouts.len(),
-        )?;
+        let views = self.capacity as usize * self.desc.layout.views() as usize;
+        let mut slot = SlotMaps::new(&self.pipeline, (rd, rd, self.capacity * layers), views)?;
         slot.framebuffers = (0..self.capacity)
             .map(|i| slot.layer_framebuffer(&self.pipeline, (i * layers, layers), layers))
             .collect::<Result<_>>()?;
         Ok(slot)
     }
 
-    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, frames: &[SensorFrame], ck: CkParams) -> Result<()> {
+    fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()> {
         let layers = self.desc.layers();
-        slot.write_views(frames, &self.layouts, self.desc.near, |i, v| i * layers + v.layer)?;
-        let per_sensor = self.layouts.len() as u32;
+        slot.write_views(batch, |i, layer| i * layers + layer)?;
+        let per_sensor = batch.per_sensor as u32;
         // Sensor i: its own framebuffer, its views, gl_Layer relative to its first layer.
-        for i in 0..frames.len() as u32 {
+        for i in 0..batch.len() as u32 {
             let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[i as usize], ck, None);
             let push = SensorPush { epsilon: ck.epsilon, layer_base: i * layers, ..Default::default() };
             self.pipeline.draw(&pass, &push, per_sensor, i * per_sensor);

@@ -1,0 +1,79 @@
+// The projected solid angle of an emitter triangle seen from a sensor, clipped to the sensor's domain:
+// the GPU twin of src/light/polygon.rs (Lambert's formula, Arvo 1995 eq. 7), step for step.
+//
+//   Omega_perp = 1/2 * sum_i Theta_i * n . (r_{i+1} x r_i) / |r_{i+1} x r_i|,   Theta_i = angle(r_i, r_{i+1})
+//
+// with r_i the clipped polygon's vertices relative to the sensor's origin. The triangle emits from its front
+// only (counter-clockwise seen from the front), so one whose front does not face the origin gives 0.
+#ifndef POLYGON_GLSL
+#define POLYGON_GLSL
+
+// A triangle clipped by up to 4 planes through the origin keeps at most 7 vertices.
+const int MAX_POLYGON = 7;
+
+// Keeps the part of `poly` (count vertices, relative to the origin) with dot(m, r) >= 0.
+void clip_half_space(inout vec3 poly[MAX_POLYGON], inout int count, vec3 m) {
+    vec3 out_poly[MAX_POLYGON];
+    int n = 0;
+    for (int i = 0; i < count; i++) {
+        vec3 a = poly[i];
+        vec3 b = poly[(i + 1) % count];
+        float da = dot(m, a);
+        float db = dot(m, b);
+        if (da >= 0.0 && n < MAX_POLYGON) {
+            out_poly[n++] = a;
+        }
+        if ((da >= 0.0) != (db >= 0.0) && n < MAX_POLYGON) {
+            out_poly[n++] = a + (b - a) * (da / (da - db));
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        poly[i] = out_poly[i];
+    }
+    count = n;
+}
+
+// Lambert's sum over a polygon relative to the receiving point, wound counter-clockwise seen from its front,
+// which faces the point.
+float lambert(vec3 poly[MAX_POLYGON], int count, vec3 n) {
+    float sum = 0.0;
+    for (int i = 0; i < count; i++) {
+        vec3 a = poly[i];
+        vec3 b = poly[(i + 1) % count];
+        vec3 c = cross(b, a);
+        float len = length(c);
+        if (len > 0.0) {
+            // atan keeps Theta accurate for nearly parallel vertices, where acos does not.
+            sum += atan(len, dot(a, b)) * dot(n, c) / len;
+        }
+    }
+    return 0.5 * sum;
+}
+
+// Omega_perp of triangle (v0, v1, v2) seen from sensor `s`, clipped to its domain (the hemisphere above
+// its tangent plane, or its square frustum of half-width s.origin.w).
+float projected_solid_angle(GpuSensor s, vec3 v0, vec3 v1, vec3 v2) {
+    vec3 o = s.origin.xyz;
+    vec3 poly[MAX_POLYGON];
+    poly[0] = v0 - o;
+    poly[1] = v1 - o;
+    poly[2] = v2 - o;
+    int count = 3;
+    if (dot(cross(poly[1] - poly[0], poly[2] - poly[0]), -poly[0]) <= 0.0) {
+        return 0.0;  // seen from behind or edge-on
+    }
+    vec3 n = s.n.xyz;
+    float half_width = s.origin.w;
+    if (half_width == 0.0) {
+        clip_half_space(poly, count, n);
+    } else {
+        vec3 t = s.t.xyz;
+        vec3 b = s.b.xyz;
+        clip_half_space(poly, count, n * half_width - t);
+        if (count >= 3) clip_half_space(poly, count, n * half_width + t);
+        if (count >= 3) clip_half_space(poly, count, n * half_width - b);
+        if (count >= 3) clip_half_space(poly, count, n * half_width + b);
+    }
+    return count >= 3 ? lambert(poly, count, n) : 0.0;
+}
+#endif
