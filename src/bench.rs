@@ -9,13 +9,10 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::light::groups::Lights;
 use crate::params::{EstimatorKind, EstimatorParams, FrameParams};
 use crate::passes::fill::FillPass;
-use crate::passes::sensor_maps::{self, StrategyDesc};
-use crate::renderer::{self, DEFAULT_IN_FLIGHT, Renderer, default_memory_budget, probe_pixels};
+use crate::renderer::{self, Renderer, probe_pixels};
 use crate::scene::{ImageSize, Scene};
-use crate::sensors::layout::SensorLayout;
 use crate::strategy::{CheckResult, StrategyKind};
 use crate::vk::Device;
 
@@ -97,7 +94,6 @@ fn median(values: &[f64]) -> f64 {
 /// Runs the benchmark; `events` hears of each self-check and each timed round.
 pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(BenchEvent)) -> Result<BenchReport> {
     let sensor = config.estimator.sensor;
-    let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
     let max_side = device.adapter.limits.max_image_dimension_2d;
     for &rd in &config.sizes {
         if let Some(problem) = sensor.size_problem(rd, max_side) {
@@ -108,13 +104,8 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(Be
     let mut skipped = Vec::new();
     let mut strategies = Vec::new();
     for &kind in &config.strategies {
-        let groups = match config.estimator_kind {
-            EstimatorKind::Exact => Lights::new(&config.scene.mesh).groups.len() as u32,
-            EstimatorKind::Paper => 0,
-        };
         let rd = config.sizes.iter().copied().max().unwrap_or(32);
-        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, rd, budget };
-        if let Some(why) = sensor_maps::unsupported(kind, device, &desc) {
+        if let Some(why) = renderer::unsupported(device, &config.scene, (sensor, config.estimator_kind, rd), kind) {
             skipped.push((kind, format!("unsupported: {why}")));
             continue;
         }

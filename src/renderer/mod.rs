@@ -197,6 +197,28 @@ pub fn self_check(
     strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget), kind)
 }
 
+/// Why strategy `kind` cannot run on `device` for `scene` with sensors of `sensor` kind and size `rd` read by
+/// `estimator`, if it cannot.
+pub fn unsupported(
+    device: &Device,
+    scene: &Scene,
+    (sensor, estimator, rd): (SensorKind, EstimatorKind, u32),
+    kind: StrategyKind,
+) -> Option<String> {
+    let config = RendererConfig {
+        estimator,
+        sensor,
+        sensor_size: rd,
+        memory_budget: None,
+        max_batch: None,
+        in_flight: DEFAULT_IN_FLIGHT,
+        strategy: StrategyRequest::Fixed(kind),
+    };
+    let layout = config.layout(&Lights::new(&scene.mesh));
+    let desc = StrategyDesc { layout, rd, budget: config.batch_budget(device, &layout) };
+    crate::passes::sensor_maps::unsupported(kind, device, &desc)
+}
+
 /// The sensor size against the device's largest image and framebuffer side.
 fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
     let limits = &device.adapter.limits;
