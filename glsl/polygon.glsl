@@ -11,6 +11,30 @@
 // A triangle clipped by up to 4 planes through the origin keeps at most 7 vertices.
 const int MAX_POLYGON = 7;
 
+// atan(t) for t in [0, 1], to about an ulp (Cephes' atanf). Vulkan allows a driver's atan to be 4096 ulp
+// off (2.4e-4 relative), which would be the largest error of the exact term.
+float atan_unit(float t) {
+    float base = 0.0;
+    float x = t;
+    if (t > 0.41421356237) {  // tan(pi / 8): reduce by pi / 4
+        base = 0.78539816340;
+        x = (t - 1.0) / (t + 1.0);
+    }
+    float z = x * x;
+    return base + ((((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1) * z * x + x);
+}
+
+// The angle between two vectors whose cross product has length y >= 0 and dot product x: atan2(y, x) in
+// [0, pi], with an argument kept in [0, 1] so that nearly parallel and nearly opposite vectors stay exact.
+float angle_between(float y, float x) {
+    float ax = abs(x);
+    float a = atan_unit(min(y, ax) / max(y, ax));
+    if (y > ax) {
+        a = 1.57079632679 - a;
+    }
+    return x < 0.0 ? 3.14159265359 - a : a;
+}
+
 // Keeps the part of `poly` (count vertices, relative to the origin) with dot(m, r) >= 0.
 void clip_half_space(inout vec3 poly[MAX_POLYGON], inout int count, vec3 m) {
     vec3 out_poly[MAX_POLYGON];
@@ -43,8 +67,8 @@ float lambert(vec3 poly[MAX_POLYGON], int count, vec3 n) {
         vec3 c = cross(b, a);
         float len = length(c);
         if (len > 0.0) {
-            // atan keeps Theta accurate for nearly parallel vertices, where acos does not.
-            sum += atan(len, dot(a, b)) * dot(n, c) / len;
+            // An atan keeps Theta accurate for nearly parallel vertices, where acos does not.
+            sum += angle_between(len, dot(a, b)) * dot(n, c) / len;
         }
     }
     return 0.5 * sum;
