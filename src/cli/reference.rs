@@ -16,7 +16,8 @@ use super::args::{EstimatorFlags, ImageFlags};
 pub struct ReferenceArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Output EXR: RGB = Le + Kd·R, plus radiance.* (R) and std_error.* (its estimated noise).
+    /// Output EXR: RGB = Le + Kd·R, plus radiance.* (R), and the estimated noise of each: std_error.* and
+    /// radiance_std_error.* (what `compare` reports as the reference's noise)
     #[arg(short, long)]
     output: PathBuf,
     #[command(flatten)]
@@ -72,7 +73,8 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     ExrImage::new(size.width, size.height)
         .rgb("", &result.image)
         .rgb("radiance", &result.radiance)
-        .rgb("std_error", &result.std_error)
+        .rgb("std_error", &result.image_std_error())
+        .rgb("radiance_std_error", &result.std_error)
         .stage(&mut files, &args.output)?;
     let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
     if let Some(path) = &png_path {

@@ -14,6 +14,10 @@
 //! - Also reported: the mean absolute relative error (per pixel, luminance), the bias
 //!   `(ΣYa − ΣYb) / ΣYb`, and the former headline, the L2 ratio `sqrt(Σ|a − b|² / Σ|b|²)` over the RGB of
 //!   the lit pixels, which the brightest pixels dominate.
+//! - **The reference's own noise**, where it carries its standard error (the CPU reference writes
+//!   `std_error.*` for its image and `radiance_std_error.*` for R): the RMS of its relative standard error over
+//!   the same lit pixels, and the image's own error with that noise removed, `sqrt(max(0, RMSE² − noise²))`
+//!   (independent errors add in quadrature).
 //! - An image holding NaN or infinite values, images of different sizes and a reference with no lit pixel
 //!   are errors, with the counts of NaN and infinite pixels of each image.
 
@@ -37,6 +41,9 @@ pub struct Picture {
     pub height: usize,
     pub rgb: Vec<[f32; 3]>,
     pub surface_id: Option<Vec<f32>>,
+    /// The standard error of `rgb` where the image is an estimate that knows its own noise (the CPU
+    /// reference).
+    pub std_error: Option<Vec<[f32; 3]>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -59,6 +66,10 @@ pub struct Agreement {
     pub surface_ids: bool,
     /// Reference luminance above which a pixel is lit: [`LIT_FRACTION`] of its mean over unmasked pixels.
     pub lit_threshold: f64,
+    /// The reference's own noise: RMS over the lit pixels of its relative standard error (where it has one).
+    pub reference_noise: Option<f64>,
+    /// The image's own error, the reference's noise removed: `sqrt(max(0, RMSE² − noise²))`.
+    pub own_error: Option<f64>,
 }
 
 impl Picture {
@@ -74,7 +85,12 @@ impl Picture {
         }
         let surface_id = take("surface_id");
         let rgb = (0..width * height).map(|i| [rgb[0][i], rgb[1][i], rgb[2][i]]).collect();
-        Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id })
+        // The layer's standard error, where the image knows it: `std_error` for the main layer,
+        // `<layer>_std_error` for another.
+        let noise = if layer.is_empty() { "std_error".to_owned() } else { format!("{layer}_std_error") };
+        let error: Option<Vec<Vec<f32>>> = ["R", "G", "B"].iter().map(|c| take(&format!("{noise}.{c}"))).collect();
+        let std_error = error.map(|e| (0..width * height).map(|i| [e[0][i], e[1][i], e[2][i]]).collect());
+        Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id, std_error })
     }
 
     /// NaN and infinite pixels (any channel), and the first one's (x, y).
@@ -157,6 +173,7 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
         / unmasked.max(1) as f64;
     let threshold = LIT_FRACTION * mean;
     let (mut rel2, mut rel_abs, mut sum_a, mut sum_b, mut err2, mut ref2, mut lit) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    let mut noise2 = 0.0;
     for i in (0..n).filter(|&i| !masked[i]) {
         let (ya, yb) = (luminance(&a.rgb[i]), luminance(&b.rgb[i]));
         if yb <= threshold || yb <= 0.0 {
@@ -165,6 +182,9 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
         lit += 1;
         let relative = (ya - yb) / yb;
         rel2 += relative * relative;
+        if let Some(e) = &b.std_error {
+            noise2 += (luminance(&e[i]) / yb).powi(2);
+        }
         rel_abs += relative.abs();
         sum_a += ya;
         sum_b += yb;
@@ -182,7 +202,10 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
             n
         );
     }
+    let reference_noise = b.std_error.as_ref().map(|_| (noise2 / lit as f64).sqrt());
     Ok(Agreement {
+        own_error: reference_noise.map(|noise| (rel2 / lit as f64 - noise * noise).max(0.0).sqrt()),
+        reference_noise,
         relative_rmse: (rel2 / lit as f64).sqrt(),
         mean_abs_relative_error: rel_abs / lit as f64,
         relative_bias: (sum_a - sum_b) / sum_b,
@@ -209,11 +232,16 @@ impl Agreement {
         } else {
             "no surface_id channel, so no silhouette masked".to_owned()
         };
-        vec![
-            format!(
-                "relative RMSE {:.4} (per pixel, luminance, over {} lit pixels of {})",
-                self.relative_rmse, self.lit_pixels, self.pixels
-            ),
+        let mut lines = vec![format!(
+            "relative RMSE {:.4} (per pixel, luminance, over {} lit pixels of {})",
+            self.relative_rmse, self.lit_pixels, self.pixels
+        )];
+        if let (Some(noise), Some(own)) = (self.reference_noise, self.own_error) {
+            lines.push(format!(
+                "reference noise {noise:.4} (RMS of its relative standard error); the image's own error {own:.4}"
+            ));
+        }
+        lines.extend([
             format!(
                 "mean absolute relative error {:.4}, bias {:+.4}, L2 ratio {:.4} (sqrt(Σ|a−b|²/Σ|b|²), RGB)",
                 self.mean_abs_relative_error, self.relative_bias, self.l2_ratio
@@ -223,7 +251,8 @@ impl Agreement {
                 self.lit_threshold,
                 LIT_FRACTION * 100.0
             ),
-        ]
+        ]);
+        lines
     }
 
     /// The figures as JSON, with the files they compare.
@@ -256,11 +285,29 @@ mod tests {
 
     fn picture(name: &str, width: usize, rgb: Vec<[f32; 3]>, ids: Option<Vec<f32>>) -> Picture {
         let height = rgb.len() / width;
-        Picture { name: name.into(), width, height, rgb, surface_id: ids }
+        Picture { name: name.into(), width, height, rgb, surface_id: ids, std_error: None }
     }
 
     /// A bright emitter and a dim wall: 10 % error on the wall, none on the emitter. The per-pixel headline
     /// sees the wall's error on half the pixels; the old L2 ratio hardly sees it.
+    /// A reference that knows its noise: the image's own error is what the noise does not explain.
+    #[test]
+    fn the_reference_noise_is_taken_out_in_quadrature() {
+        let b = vec![[1.0; 3]; 4];
+        let a: Vec<[f32; 3]> = [1.05f32, 0.95, 1.05, 0.95].iter().map(|&v| [v; 3]).collect();
+        let mut reference = picture("ref", 2, b, None);
+        let image = picture("img", 2, a, None);
+        let without = agreement(&image, &reference).unwrap();
+        assert!(without.reference_noise.is_none() && without.own_error.is_none());
+        reference.std_error = Some(vec![[0.03; 3]; 4]);
+        let with = agreement(&image, &reference).unwrap();
+        assert!((with.relative_rmse - 0.05).abs() < 1e-6);
+        assert!((with.reference_noise.unwrap() - 0.03).abs() < 1e-6);
+        assert!((with.own_error.unwrap() - 0.04).abs() < 1e-6, "sqrt(0.05² − 0.03²) = 0.04");
+        reference.std_error = Some(vec![[0.2; 3]; 4]);
+        assert_eq!(agreement(&image, &reference).unwrap().own_error, Some(0.0), "noise explains all of it");
+    }
+
     #[test]
     fn the_headline_weighs_every_lit_pixel_alike() {
         let mut b = vec![[100.0f32; 3]; 4];

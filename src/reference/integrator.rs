@@ -264,6 +264,15 @@ fn power_heuristic(own: f64, other: f64) -> f64 {
 }
 
 impl ReferenceImage {
+    /// The standard error of [`ReferenceImage::image`]: `Kd` times R's (`Le` is exact).
+    pub fn image_std_error(&self) -> Vec<Vec4> {
+        self.std_error
+            .iter()
+            .zip(&self.gbuffer.albedo)
+            .map(|(e, kd)| (e.truncate() * kd.truncate()).extend(1.0))
+            .collect()
+    }
+
     /// Mean relative standard error of `R` over the pixels where `R` is not negligible (luminance-weighted).
     pub fn relative_noise(&self) -> f32 {
         let lum = |v: Vec4| v.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722));

@@ -25,7 +25,8 @@ use crate::gpu_types::{GpuSensor, GpuSensorResult, GpuZoom};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
 use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
 use crate::scene::Aabb;
-use crate::sensors::frame::SensorFrame;
+use crate::sensors::SensorKind;
+use crate::sensors::frame::{self, SensorFrame};
 use crate::sensors::views::BatchViews;
 use crate::strategy::StrategyKind;
 use crate::vk::{Access, Buffer, CommandSlot, Device, TimestampQueries, barrier};
@@ -77,6 +78,9 @@ pub(crate) struct BatchRunner {
     bias: f32,
     near: f32,
     desc: StrategyDesc,
+    /// Turn each sensor about its normal by its pixel's turn (`frame::pixel_turn`): hemicubes of the exact
+    /// estimator, whose domain a turn leaves as it is.
+    turn: bool,
     /// Bounding box of each light group measured.
     groups: Vec<Aabb>,
     /// The radiance map the reductions write: every batch submitted keeps it alive until its fence
@@ -136,6 +140,7 @@ impl BatchRunner {
             bias,
             near,
             desc,
+            turn: desc.exact() && desc.layout.kind == SensorKind::Hemicube,
             groups,
             radiance: None,
             device: device.clone(),
@@ -186,10 +191,13 @@ impl BatchRunner {
             self.retire(index, deliver)?;
 
             let start = Instant::now();
+            let width = g.size.width;
             let frames: Vec<SensorFrame> = chunk
                 .iter()
                 .map(|&i| {
-                    SensorFrame::new(g.position[i as usize].truncate(), g.normal[i as usize].truncate(), self.bias)
+                    let p = (g.position[i as usize].truncate(), g.normal[i as usize].truncate());
+                    let frame = SensorFrame::new(p.0, p.1, self.bias);
+                    if self.turn { frame.turned(frame::pixel_turn(i % width, i / width)) } else { frame }
                 })
                 .collect();
             let views = BatchViews::new(&frames, &self.desc.layout, self.near, &self.groups, self.desc.rd);

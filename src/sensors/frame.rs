@@ -34,6 +34,15 @@ impl SensorFrame {
         Self { origin: p + n * bias, t, b, n }
     }
 
+    /// The same sensor turned about its normal by `angle` radians. A hemicube covers the same hemisphere
+    /// whatever its turn, so this changes only which directions share a texel: turning each pixel's sensor
+    /// differently ([`pixel_turn`]) makes what aliasing remains noise, which the filter removes, instead of
+    /// bands.
+    pub fn turned(self, angle: f32) -> Self {
+        let (sin, cos) = angle.sin_cos();
+        Self { t: self.t * cos + self.b * sin, b: self.b * cos - self.t * sin, ..self }
+    }
+
     pub fn axis(&self, axis: Axis) -> Vec3 {
         match axis {
             Axis::T => self.t,
@@ -75,6 +84,16 @@ impl SensorFrame {
     }
 }
 
+/// The turn of the sensor at pixel `(x, y)`: 2π times the R2 low-discrepancy sequence (Roberts 2018) over
+/// the pixel grid, so that neighbouring pixels' turns are well spread and every turn is as likely.
+pub fn pixel_turn(x: u32, y: u32) -> f32 {
+    // The plastic number g: α = (1/g, 1/g²).
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_2;
+    let u = (0.5 + A1 * x as f64 + A2 * y as f64).fract();
+    (std::f64::consts::TAU * u) as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,6 +110,20 @@ mod tests {
         let a = SensorFrame::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), 0.0);
         let b = SensorFrame::new(Vec3::ZERO, Vec3::new(1.0, 0.0, -0.0), 0.0);
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn a_turned_frame_is_still_orthonormal_about_the_same_normal_and_turns_spread() {
+        let f = SensorFrame::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.9, -0.1).normalize(), 0.01);
+        let g = f.turned(1.1);
+        assert_eq!((g.n, g.origin), (f.n, f.origin));
+        assert!((g.t.cross(g.b) - g.n).length() < 1e-5 && (g.t.dot(f.t) - 1.1f32.cos()).abs() < 1e-5);
+        // Neighbouring pixels' turns differ; over a block they cover the circle evenly.
+        let turns: Vec<f32> = (0..8).flat_map(|y| (0..8).map(move |x| pixel_turn(x, y))).collect();
+        let mut counts = [0; 8];
+        turns.iter().for_each(|t| counts[(t / std::f32::consts::TAU * 8.0) as usize % 8] += 1);
+        assert!(counts.iter().all(|&c| (6..=10).contains(&c)), "turns of an 8 × 8 block by octant: {counts:?}");
+        assert!((pixel_turn(3, 4) - pixel_turn(4, 4)).abs() > 0.1);
     }
 
     /// The projection sends the direction through an NDC point back to that NDC point.

@@ -1,0 +1,95 @@
+//! The exact estimator against the oracle on the hard cases (docs/DESIGN.md §6): every pixel sensed,
+//! hemicube rd 64, no filter, ε = 0 (direct light), per-pixel relative RMSE on lit pixels with silhouettes
+//! masked, the oracle's own noise taken out (`output::compare`). Each must be within 1 %.
+
+mod common;
+
+use std::path::Path;
+
+use glam::Vec4;
+use sensorlight::output::compare::{Agreement, Picture, agreement};
+use sensorlight::params::EstimatorKind;
+use sensorlight::reference::integrator::Integrator;
+use sensorlight::renderer::{Quiet, Renderer};
+use sensorlight::scene::{ImageSize, Scene};
+use sensorlight::sensors::SensorKind;
+
+fn picture(name: &str, size: ImageSize, rgb: &[Vec4], ids: Option<&[u32]>, noise: Option<&[Vec4]>) -> Picture {
+    let triple = |v: &[Vec4]| v.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
+    Picture {
+        name: name.into(),
+        width: size.width as usize,
+        height: size.height as usize,
+        rgb: triple(rgb),
+        surface_id: ids.map(|ids| ids.iter().map(|&i| i as f32).collect()),
+        std_error: noise.map(triple),
+    }
+}
+
+/// The exact estimator's image of `scene` at `size` against the oracle's with `samples` samples.
+fn against_the_oracle(scene_file: &str, size: (u32, u32), sensor: SensorKind, samples: u32) -> Agreement {
+    let scene = Scene::load(&common::project(scene_file)).unwrap();
+    let size = ImageSize { width: size.0, height: size.1 };
+    let setup = common::every_pixel(sensor, 64, 0.0);
+    let out = common::gpu(|device| {
+        let mut renderer = Renderer::builder(device, &scene, sensor, setup.rd)
+            .estimator(EstimatorKind::Exact)
+            .build_unchecked(Default::default())
+            .unwrap();
+        renderer.render(size, &setup.frame, &Quiet).unwrap()
+    });
+    let oracle = Integrator::new(&scene, setup.estimator, samples, 5).unwrap().render(size, &|_| ());
+    let noise = oracle.image_std_error();
+    let name = Path::new(scene_file).file_name().unwrap().to_string_lossy().into_owned();
+    let image = picture(&name, size, &out.image, Some(&out.gbuffer.surface), None);
+    let reference = picture("oracle", size, &oracle.image, None, Some(&noise));
+    let a = agreement(&image, &reference).unwrap();
+    eprintln!(
+        "{name}, {sensor}: relative RMSE {:.4}, oracle noise {:.4}, own error {:.4}, bias {:+.4} over {} lit pixels",
+        a.relative_rmse,
+        a.reference_noise.unwrap(),
+        a.own_error.unwrap(),
+        a.relative_bias,
+        a.lit_pixels
+    );
+    a
+}
+
+fn within_one_percent(a: &Agreement) {
+    let own = a.own_error.unwrap();
+    assert!(
+        own <= 0.01,
+        "own error {own:.4} (relative RMSE {:.4}, oracle noise {:.4})",
+        a.relative_rmse,
+        a.reference_noise.unwrap()
+    );
+}
+
+#[test]
+fn cornell_box_within_one_percent() {
+    within_one_percent(&against_the_oracle("scenes/cornell/cornell.toml", (48, 48), SensorKind::Hemicube, 4096));
+}
+
+/// A light 1/30 of the room wide at 2 m, Ke 2000, over a table and a box: penumbrae a few centimetres wide.
+#[test]
+fn small_bright_light_with_penumbrae_within_one_percent() {
+    within_one_percent(&against_the_oracle(
+        "scenes/small-light/small-light.toml",
+        (64, 48),
+        SensorKind::Hemicube,
+        1024,
+    ));
+}
+
+/// Four lights of different shapes and sizes, each its own light group.
+#[test]
+fn room_with_four_lights_within_one_percent() {
+    within_one_percent(&against_the_oracle("scenes/room/room.toml", (64, 48), SensorKind::Hemicube, 4096));
+}
+
+/// The paper's 135° frustum sensor against the oracle over the same frustum domain.
+#[test]
+fn frustum_sensor_within_one_percent_of_its_domain() {
+    let frustum = SensorKind::Frustum { fov_deg: 135.0 };
+    within_one_percent(&against_the_oracle("scenes/cornell/cornell.toml", (48, 48), frustum, 4096));
+}
