@@ -17,6 +17,8 @@ layout(std430, set = 0, binding = 8) buffer Zooms { GpuZoom zooms[]; };
 layout(std430, set = 0, binding = 9) buffer Emitters { GpuEmitter emitters[]; };
 layout(std430, set = 0, binding = 10) buffer Groups { GpuLightGroup groups[]; };
 layout(std430, set = 0, binding = 11) buffer Results { GpuSensorResult results[]; };
+layout(std430, set = 0, binding = 12) buffer Chunks { GpuEmitterChunk chunks[]; };
+layout(std430, set = 0, binding = 13) buffer EmitterPushes { EmitterPush emitter_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -32,4 +34,6 @@ void main() {
     emitters[1] = emitters[0];
     groups[1] = groups[0];
     results[1] = results[0];
+    chunks[1] = chunks[0];
+    emitter_pushes[1] = emitter_pushes[0];
 }

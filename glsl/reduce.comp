@@ -7,8 +7,8 @@
 //                       of each texel (src/sensors/weights.rs);
 //   exact estimator:    R = (1/pi) * (sum(Ck_rest * w) + sum_g E_g * V_g), where the main layers hold only
 //                       Kd*eps and the background (emitter fronts leave 0), E_g is light group g's
-//                       unoccluded irradiance in closed form (polygon.glsl, each triangle clipped to the
-//                       sensor's domain), and V_g its visibility: the weighted coverage of g's fronts in
+//                       unoccluded irradiance in closed form (the emitter pass, emitters.comp, by chunk of
+//                       emitters), and V_g its visibility: the weighted coverage of g's fronts in
 //                       the zoom view drawn with the whole scene over that in the same view drawn with the
 //                       emitters alone. Both are rasterised alike, so where nothing occludes V_g is exactly
 //                       1 and the quantisation of the sensor map cancels (the ratio estimator of Heitz,
@@ -22,7 +22,6 @@
 // runs a workgroup's invocations as coroutines that all switch at every barrier, and with 256 the barriers
 // cost more than the sums (docs/BENCHMARKS.md); a GPU still has hundreds of sensors' workgroups in flight.
 #include "types.glsl"
-#include "polygon.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -33,13 +32,16 @@ layout(std430, set = 0, binding = 3) buffer Radiance { vec4 radiance[]; };      
 layout(std430, set = 0, binding = 4) writeonly buffer Results { GpuSensorResult results[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Sensors { GpuSensor sensors[]; };  // of the batch
 layout(std430, set = 0, binding = 6) readonly buffer Zooms { GpuZoom zooms[]; };  // [sensor][group]
-layout(std430, set = 0, binding = 7) readonly buffer Emitters { GpuEmitter emitters[]; };
+layout(std430, set = 0, binding = 7) readonly buffer Irradiance { vec4 irradiance[]; };  // [sensor][chunk]
 layout(std430, set = 0, binding = 8) readonly buffer Groups { GpuLightGroup groups[]; };
 layout(push_constant) uniform Push { ReducePush push; };
 
-// Per thread: R's rest (3), then per group: E (3), visible and unoccluded coverage (2).
-const uint COMPONENTS = 3u + 5u * MAX_GROUPS;
-shared float partial[64u * COMPONENTS];
+shared vec3 partial[64];
+// Per thread, for the light group being measured: its visible and unoccluded coverage.
+shared vec2 partial_light[64];
+// What the sensor saw of each group, for the results. Kept in shared memory rather than in each thread:
+// a CPU driver keeps whatever a thread holds across a barrier in that thread's coroutine frame.
+shared float seen[MAX_GROUPS];
 
 // Where layer `layer` of sensor `sensor` is: an array layer, or a tile of the atlas.
 ivec3 map_origin(uint sensor, uint layer) {
@@ -69,86 +71,78 @@ void main() {
             }
         }
     }
-    partial[lid * COMPONENTS + 0u] = sum.r;
-    partial[lid * COMPONENTS + 1u] = sum.g;
-    partial[lid * COMPONENTS + 2u] = sum.b;
-
-    // Each light group: its exact unoccluded irradiance, and its coverage in the zoom pair.
-    GpuSensor s = sensors[sensor];
-    for (uint g = 0u; g < MAX_GROUPS; g++) {
-        vec3 e = vec3(0.0);
-        float visible = 0.0;
-        float unoccluded = 0.0;
-        GpuZoom zoom;
-        if (g < push.groups) {
-            zoom = zooms[sensor * push.groups + g];
-        }
-        if (g < push.groups && zoom.forward.w > 0.0) {
-            GpuLightGroup group = groups[g];
-            for (uint k = group.first + lid; k < group.first + group.count; k += 64u) {
-                GpuEmitter em = emitters[k];
-                e += em.ke.rgb * projected_solid_angle(s, em.v0.xyz, em.v1.xyz, em.v2.xyz);
-            }
-            // Zoom texel weights: cos(theta) d(omega) of each texel, from its direction d through the view
-            // plane at distance 1: area * (n . d) / |d|^4, area = (2 tan / rd)^2.
-            float tan_half = zoom.right.w;
-            float area = (2.0 * tan_half / float(rd)) * (2.0 * tan_half / float(rd));
-            float id = float(g + 1u);
-            ivec3 with_scene = map_origin(sensor, push.main_layers + 2u * g);
-            ivec3 alone = map_origin(sensor, push.main_layers + 2u * g + 1u);
-            for (uint y = thread.y; y < rd; y += 8u) {
-                float ndc_y = (float(y) + 0.5) * (2.0 / float(rd)) - 1.0;
-                for (uint x = thread.x; x < rd; x += 8u) {
-                    float ndc_x = (float(x) + 0.5) * (2.0 / float(rd)) - 1.0;
-                    vec3 d = zoom.forward.xyz + zoom.right.xyz * (ndc_x * tan_half) - zoom.up.xyz * (ndc_y * tan_half);
-                    float len2 = dot(d, d);
-                    float w = max(dot(s.n.xyz, d), 0.0) * area / (len2 * len2);
-                    if (imageLoad(sensor_maps, with_scene + ivec3(x, y, 0)).a == id) {
-                        visible += w;
-                    }
-                    if (imageLoad(sensor_maps, alone + ivec3(x, y, 0)).a == id) {
-                        unoccluded += w;
-                    }
-                }
-            }
-        }
-        uint base = lid * COMPONENTS + 3u + 5u * g;
-        partial[base + 0u] = e.r;
-        partial[base + 1u] = e.g;
-        partial[base + 2u] = e.b;
-        partial[base + 3u] = visible;
-        partial[base + 4u] = unoccluded;
-    }
-
+    partial[lid] = sum;
     barrier();
-    uint used = 3u + 5u * push.groups;  // components in use: the paper's estimator adds only R's three
     for (uint stride = 32u; stride > 0u; stride >>= 1u) {
         if (lid < stride) {
-            for (uint c = 0u; c < used; c++) {
-                partial[lid * COMPONENTS + c] += partial[(lid + stride) * COMPONENTS + c];
-            }
+            partial[lid] += partial[lid + stride];
         }
         barrier();
     }
-    if (lid == 0u) {
-        vec3 r = vec3(partial[0], partial[1], partial[2]);
-        GpuSensorResult result;
-        for (uint g = 0u; g < MAX_GROUPS; g++) {
-            uint base = 3u + 5u * g;
-            vec3 e = vec3(partial[base], partial[base + 1u], partial[base + 2u]);
-            float visible = partial[base + 3u];
-            float unoccluded = partial[base + 4u];
-            float v = -1.0;
-            if (g < push.groups && max(e.r, max(e.g, e.b)) > 0.0) {
-                // No texel of the group in its zoom view (it is edge-on, or smaller than a texel even
-                // there): nothing says it is hidden.
-                v = unoccluded > 0.0 ? visible / unoccluded : 1.0;
-                r += e * v;
-            }
-            result.visibility[g] = v;
+    vec3 r = partial[0];
+
+    // Each light group: its exact unoccluded irradiance, and its coverage in the zoom pair (exact estimator).
+    if (lid < MAX_GROUPS) {
+        seen[lid] = -1.0;
+    }
+    for (uint g = 0u; g < push.groups; g++) {
+        GpuZoom zoom = zooms[sensor * push.groups + g];
+        if (zoom.forward.w == 0.0) {
+            continue;  // below the sensor's horizon, it sends nothing (the same for every thread)
         }
-        result.r = vec4(r / PI, STATE_SENSED);
-        radiance[pixels[sensor]] = result.r;
-        results[sensor] = result;
+        vec3 n = sensors[sensor].n.xyz;
+        // Zoom texel weights: cos(theta) d(omega) of each texel, from its direction d through the view plane
+        // at distance 1: area * (n . d) / |d|^4, area = (2 tan / rd)^2.
+        float tan_half = zoom.right.w;
+        float area = (2.0 * tan_half / float(rd)) * (2.0 * tan_half / float(rd));
+        float id = float(g + 1u);
+        ivec3 with_scene = map_origin(sensor, push.main_layers + 2u * g);
+        ivec3 alone = map_origin(sensor, push.main_layers + 2u * g + 1u);
+        float visible = 0.0;
+        float unoccluded = 0.0;
+        for (uint y = thread.y; y < rd; y += 8u) {
+            float ndc_y = (float(y) + 0.5) * (2.0 / float(rd)) - 1.0;
+            for (uint x = thread.x; x < rd; x += 8u) {
+                float ndc_x = (float(x) + 0.5) * (2.0 / float(rd)) - 1.0;
+                vec3 d = zoom.forward.xyz + zoom.right.xyz * (ndc_x * tan_half) - zoom.up.xyz * (ndc_y * tan_half);
+                float len2 = dot(d, d);
+                float w = max(dot(n, d), 0.0) * area / (len2 * len2);
+                visible += imageLoad(sensor_maps, with_scene + ivec3(x, y, 0)).a == id ? w : 0.0;
+                unoccluded += imageLoad(sensor_maps, alone + ivec3(x, y, 0)).a == id ? w : 0.0;
+            }
+        }
+        partial_light[lid] = vec2(visible, unoccluded);
+        barrier();
+        for (uint stride = 32u; stride > 0u; stride >>= 1u) {
+            if (lid < stride) {
+                partial_light[lid] += partial_light[lid + stride];
+            }
+            barrier();
+        }
+        vec2 coverage = partial_light[0];
+        barrier();  // every thread has read the totals before the next group overwrites them
+        GpuLightGroup group = groups[g];
+        vec3 e = vec3(0.0);
+        for (uint c = group.first_chunk; c < group.first_chunk + group.chunks; c++) {
+            e += irradiance[sensor * push.chunks + c].rgb;
+        }
+        if (max(e.r, max(e.g, e.b)) > 0.0) {
+            // No texel of the group in its zoom view (it is edge-on, or smaller than a texel even there):
+            // nothing says it is hidden.
+            float v = coverage.y > 0.0 ? coverage.x / coverage.y : 1.0;
+            r += e * v;
+            if (lid == 0u) {
+                seen[g] = v;
+            }
+        }
+    }
+
+    if (lid == 0u) {
+        vec4 value = vec4(r / PI, STATE_SENSED);
+        radiance[pixels[sensor]] = value;
+        results[sensor].r = value;
+        for (uint g = 0u; g < MAX_GROUPS; g++) {
+            results[sensor].visibility[g] = seen[g];
+        }
     }
 }

@@ -44,9 +44,23 @@ struct GpuEmitter {
 };
 
 struct GpuLightGroup {
+    uint first_chunk;
+    uint chunks;
+    uint _pad[2];
+};
+
+struct GpuEmitterChunk {
     uint first;
     uint count;
-    uint _pad[2];
+    uint group;
+    uint _pad;
+};
+
+struct EmitterPush {
+    uint sensors;  // of the batch
+    uint chunks;   // of the scene
+    uint groups;
+    uint _pad;
 };
 
 const uint MAX_GROUPS = 8u;
@@ -72,7 +86,8 @@ struct ReducePush {
     uint main_layers;    // summed with the precomputed weights
     uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
     uint groups;         // light groups measured (0: the paper's estimator)
-    uint _pad[3];
+    uint chunks;         // emitter chunks of the scene: the stride of the irradiance per sensor
+    uint _pad[2];
 };
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).

@@ -8,7 +8,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::Vec4;
 
-use crate::gpu_types::{GpuEmitter, GpuLightGroup, GpuSurface, MAX_GROUPS, Vertex};
+use crate::gpu_types::{EMITTER_CHUNK, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS, Vertex};
 use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene};
 use crate::vk::{Buffer, Device, transfer};
@@ -20,8 +20,11 @@ pub struct GpuScene {
     pub normals: Arc<Buffer>,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
-    /// The emitters, group by group (`GpuEmitter`), and each group's range of them (`GpuLightGroup`).
+    /// The emitters, group by group (`GpuEmitter`); them in chunks of at most `EMITTER_CHUNK`
+    /// (`GpuEmitterChunk`), and each group's range of chunks (`GpuLightGroup`).
     pub emitters: Arc<Buffer>,
+    pub chunks: Arc<Buffer>,
+    pub chunk_count: u32,
     pub groups: Arc<Buffer>,
     /// The same on the host: sensors' zoom views bound the groups.
     pub lights: Lights,
@@ -43,11 +46,16 @@ impl GpuScene {
                 ke: e.ke.extend(0.0),
             })
             .collect();
-        let groups: Vec<GpuLightGroup> = lights
-            .groups
-            .iter()
-            .map(|g| GpuLightGroup { first: g.emitters.start, count: g.emitters.len() as u32, _pad: [0; 2] })
-            .collect();
+        let mut chunks = Vec::new();
+        let mut groups = Vec::new();
+        for (g, group) in lights.groups.iter().enumerate() {
+            let first_chunk = chunks.len() as u32;
+            for first in group.emitters.clone().step_by(EMITTER_CHUNK as usize) {
+                let count = EMITTER_CHUNK.min(group.emitters.end - first);
+                chunks.push(GpuEmitterChunk { first, count, group: g as u32, _pad: 0 });
+            }
+            groups.push(GpuLightGroup { first_chunk, chunks: chunks.len() as u32 - first_chunk, _pad: [0; 2] });
+        }
         let normals: Vec<Vec4> = mesh.triangles.iter().map(|t| t.normal.extend(0.0)).collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
@@ -61,6 +69,8 @@ impl GpuScene {
             normals: Arc::new(transfer::upload(device, "triangle normals", &normals, storage)?),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
+            chunk_count: chunks.len() as u32,
+            chunks: Arc::new(transfer::upload(device, "emitter chunks", &chunks, storage)?),
             groups: Arc::new(transfer::upload(device, "light groups", &groups, storage)?),
             lights,
         })

@@ -86,13 +86,38 @@ pub struct GpuEmitter {
     pub ke: Vec4,
 }
 
-/// A light group's range of emitters.
+/// A light group's chunks of emitters (a range of [`GpuEmitterChunk`]s).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuLightGroup {
+    pub first_chunk: u32,
+    pub chunks: u32,
+    pub _pad: [u32; 2],
+}
+
+/// At most [`EMITTER_CHUNK`] emitters of one group: the emitter pass sums one chunk per invocation and
+/// sensor, so that a group of thousands of triangles is spread over many invocations.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuEmitterChunk {
     pub first: u32,
     pub count: u32,
-    pub _pad: [u32; 2],
+    pub group: u32,
+    pub _pad: u32,
+}
+
+/// Emitters per chunk.
+pub const EMITTER_CHUNK: u32 = 256;
+
+/// Push constants of the emitter pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct EmitterPush {
+    /// Sensors of the batch, chunks and light groups of the scene.
+    pub sensors: u32,
+    pub chunks: u32,
+    pub groups: u32,
+    pub _pad: u32,
 }
 
 /// Light groups a sensor measures at most (`light::groups::MAX_GROUPS`; fixed here for the shaders).
@@ -140,9 +165,11 @@ pub struct ReducePush {
     pub main_layers: u32,
     /// 0: sensor maps are layers of a 2D array. Otherwise tiles of one atlas with this many per row.
     pub atlas_columns: u32,
-    /// Light groups measured (0: the paper's estimator).
+    /// Light groups measured (0: the paper's estimator), and the scene's emitter chunks (the stride of the
+    /// emitter pass's irradiance, per sensor).
     pub groups: u32,
-    pub _pad: [u32; 3],
+    pub chunks: u32,
+    pub _pad: [u32; 2],
 }
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).

@@ -15,10 +15,36 @@ pub use crate::sensors::SensorShape;
 pub const DEFAULT_SENSOR: SensorShape = SensorShape::Hemicube;
 pub const DEFAULT_FOV_DEG: f32 = 135.0;
 pub const DEFAULT_EPSILON: f32 = 0.1;
-pub const DEFAULT_SENSOR_SIZE: u32 = 256;
+/// The sensor map size and filter radius by estimator. The exact estimator reads only visibility from its
+/// maps, through zoom views: 32² maps keep every shipped and hard scene within 1 % of the oracle, and its
+/// little noise the filter cannot lower without blurring real gradients (docs/ACCURACY.md). The paper's
+/// estimator keeps the paper's 256² and the filter that hides its tiles.
+pub const DEFAULT_SENSOR_SIZE: EstimatorDefault<u32> = EstimatorDefault { exact: 32, paper: 256 };
+pub const DEFAULT_FILTER_RADIUS: EstimatorDefault<u32> = EstimatorDefault { exact: 0, paper: 2 };
+
+/// A default that depends on the estimator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EstimatorDefault<T> {
+    pub exact: T,
+    pub paper: T,
+}
+
+impl<T: Copy> EstimatorDefault<T> {
+    pub fn for_estimator(&self, kind: EstimatorKind) -> T {
+        match kind {
+            EstimatorKind::Exact => self.exact,
+            EstimatorKind::Paper => self.paper,
+        }
+    }
+}
+
+impl<T: fmt::Display> fmt::Display for EstimatorDefault<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} (paper's estimator: {})", self.exact, self.paper)
+    }
+}
 pub const DEFAULT_TILE: u32 = 16;
 pub const DEFAULT_DRADIANCE: f32 = 0.2;
-pub const DEFAULT_FILTER_RADIUS: u32 = 2;
 pub const DEFAULT_EXPOSURE: f32 = 0.0;
 pub const DEFAULT_ESTIMATOR: EstimatorKind = EstimatorKind::Exact;
 
@@ -224,11 +250,14 @@ pub struct FrameParams {
     pub background: Vec3,
     /// dt: initial grid step of the adaptive refinement (paper §III-G), a power of two ≥ 1; 16 typical.
     pub tile: u32,
-    /// Largest relative variation of R between a quad's corners that is still interpolated; ≥ 0.
-    /// 0 senses every pixel; 0.1–0.4 typical (0.2: the Cornell box at 256² within 0.3 % of the error of
-    /// 0.1 against the CPU reference, in 60 % of the time); a huge value senses only the grid.
+    /// Largest relative variation of R, and of each light group's visibility, between a quad's corners that
+    /// is still interpolated; ≥ 0. 0 senses every pixel; 0.1–0.4 typical (0.2: every shipped and hard scene
+    /// within 1 % of the oracle with the exact estimator; 0.1 halves the error in 1.4× the time); a huge value
+    /// senses only the grid (and the light hints' boundaries).
     pub dradiance: f32,
-    /// Radius in pixels of the id-constrained Gaussian filter (paper §III-H), σ = radius / 2; 0 = off.
+    /// Radius in pixels of the id-constrained Gaussian filter (paper §III-H), σ = radius / 2; 0 = off. It
+    /// keeps to the centre pixel's surface and light mask; the exact estimator leaves it little noise to
+    /// remove, so it is off by default there.
     pub filter_radius: u32,
 }
 
@@ -238,8 +267,9 @@ pub struct RenderParams {
     /// How R is estimated from the maps.
     pub estimator_kind: EstimatorKind,
     pub estimator: EstimatorParams,
-    /// rd: sensor map side in texels, 2 … the device's largest image side (even for hemicubes). Noise falls
-    /// and cost grows roughly with rd²; 64–256 typical (the paper: 256).
+    /// rd: sensor map side in texels, 2 … the device's largest image side (even for hemicubes). Cost grows
+    /// roughly with rd²; 16–64 typical with the exact estimator (whose maps resolve only visibility, in zoom
+    /// views of rd² each), 128–256 with the paper's (the paper: 256).
     pub sensor_size: u32,
     pub tile: u32,
     pub dradiance: f32,
@@ -280,10 +310,11 @@ impl RenderParams {
         let fov = resolve!(fov_deg, Param::Fov, DEFAULT_FOV_DEG);
         let epsilon = resolve!(epsilon, Param::Epsilon, DEFAULT_EPSILON);
         let background = Vec3::from(resolve!(background, Param::Background, [0.0; 3]));
-        let sensor_size = resolve!(sensor_size, Param::SensorSize, DEFAULT_SENSOR_SIZE);
+        let sensor_size = resolve!(sensor_size, Param::SensorSize, DEFAULT_SENSOR_SIZE.for_estimator(estimator_kind));
         let tile = resolve!(tile, Param::Tile, DEFAULT_TILE);
         let dradiance = resolve!(dradiance, Param::Dradiance, DEFAULT_DRADIANCE);
-        let filter_radius = resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS);
+        let filter_radius =
+            resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS.for_estimator(estimator_kind));
         let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
         let sensor = SensorKind::new(shape, fov);
         let params = Self {
@@ -344,7 +375,11 @@ mod tests {
         let flags = Overrides { epsilon: Some(0.25), ..Default::default() };
         let path = Path::new("room.toml");
         let p = RenderParams::resolve(Some((path, &scene)), &flags).unwrap();
-        assert_eq!((p.estimator.epsilon, p.tile, p.sensor_size), (0.25, 8, DEFAULT_SENSOR_SIZE));
+        assert_eq!((p.estimator.epsilon, p.tile, p.sensor_size), (0.25, 8, DEFAULT_SENSOR_SIZE.exact));
+        let paper =
+            RenderParams::resolve(None, &Overrides { estimator: Some(EstimatorKind::Paper), ..Default::default() });
+        let paper = paper.unwrap();
+        assert_eq!((paper.sensor_size, paper.filter_radius), (256, 2), "the paper's estimator keeps its defaults");
         assert_eq!(p.estimator.sensor, SensorKind::Hemicube);
         assert_eq!(p.origin(Param::Epsilon), Origin::Flag);
         assert_eq!(p.origin(Param::Tile), Origin::SceneFile(path.into()));

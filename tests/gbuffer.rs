@@ -6,7 +6,8 @@ use glam::Vec4;
 use sensorlight::gbuffer::GBufferData;
 use sensorlight::gpu_scene::GpuScene;
 use sensorlight::passes::gbuffer::{self, GBufferPass};
-use sensorlight::reference::{bvh::Bvh, gbuffer as cpu_gbuffer};
+use sensorlight::reference::gbuffer as cpu_gbuffer;
+use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::{ImageSize, NO_SURFACE, Scene};
 
 fn gpu_gbuffer(scene: &Scene, size: ImageSize) -> GBufferData {

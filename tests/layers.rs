@@ -16,7 +16,7 @@ const RULES: &[(&str, &[&str])] = &[
     // CPU algorithms.
     ("light", &["scene"]),
     ("gbuffer", &["scene"]),
-    ("sensors", &["scene", "gbuffer", "gpu_types"]),
+    ("sensors", &["scene", "gbuffer", "gpu_types", "light"]),
     ("params", &["sensors"]),
     // The oracle: CPU only, never a GPU pass.
     ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),

@@ -5,8 +5,8 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    GBufferPush, GpuEmitter, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom,
-    ImagePush, ReducePush, SensorPush,
+    EmitterPush, GBufferPush, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult,
+    GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -88,14 +88,16 @@ fn shared_structs_match_glsl() {
             "SensorPush",
             rust_layout!(SensorPush: epsilon, first_view, layer_base, atlas_columns, atlas_rows, exact, _pad),
         ),
-        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, main_layers, atlas_columns, groups, _pad)),
+        (4, "ReducePush", rust_layout!(ReducePush: rd, layers, main_layers, atlas_columns, groups, chunks, _pad)),
         (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
         (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),
         (7, "GpuSensor", rust_layout!(GpuSensor: origin, t, b, n)),
         (8, "GpuZoom", rust_layout!(GpuZoom: right, up, forward)),
         (9, "GpuEmitter", rust_layout!(GpuEmitter: v0, v1, v2, ke)),
-        (10, "GpuLightGroup", rust_layout!(GpuLightGroup: first, count, _pad)),
+        (10, "GpuLightGroup", rust_layout!(GpuLightGroup: first_chunk, chunks, _pad)),
         (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility)),
+        (12, "GpuEmitterChunk", rust_layout!(GpuEmitterChunk: first, count, group, _pad)),
+        (13, "EmitterPush", rust_layout!(EmitterPush: sensors, chunks, groups, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

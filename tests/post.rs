@@ -11,9 +11,10 @@ use sensorlight::scene::ImageSize;
 use sensorlight::sensors::SensorKind;
 use sensorlight::vk::{Access, Image, ImageDesc, barrier, transfer};
 
-/// Runs the GPU filter over `source` with surface ids `ids`.
-fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec<Vec4> {
+/// Runs the GPU filter over `source` with surface ids `ids` and light masks `masks` (empty: none).
+fn gpu_filter(source: &[Vec4], ids: &[u32], masks: &[u64], size: ImageSize, radius: u32) -> Vec<Vec4> {
     common::gpu(|device| {
+        let masks = if masks.is_empty() { vec![0u64; source.len()] } else { masks.to_vec() };
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let src = transfer::upload(device, "source", source, usage).unwrap();
         let dst = transfer::upload(device, "target", &vec![Vec4::splat(-1.0); source.len()], usage).unwrap();
@@ -27,8 +28,9 @@ fn gpu_filter(source: &[Vec4], ids: &[u32], size: ImageSize, radius: u32) -> Vec
         };
         let id_image = Image::new(device, "ids", desc).unwrap();
         transfer::write_image(device, &id_image, ids).unwrap();
+        let masks = transfer::upload(device, "light masks", &masks, vk::BufferUsageFlags::STORAGE_BUFFER).unwrap();
         let pass = FilterPass::new(device).unwrap();
-        pass.bind(device, &src, &dst, &id_image);
+        pass.bind(device, &src, &dst, &id_image, &masks);
         device
             .submit_and_wait(|enc| {
                 barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeRead]);
@@ -51,9 +53,11 @@ fn gpu_filter_matches_the_cpu_twin() {
     let ids: Vec<u32> =
         (0..37 * 23).map(|i| if i % 37 == 0 { 0 } else { 1 + (i % 37 > (i / 37) + 5) as u32 }).collect();
     let source: Vec<Vec4> = (0..37 * 23).map(|i| noise(i, 1)).collect();
-    for radius in [1, 3] {
-        let expected = post::filter(&source, &ids, size, radius);
-        let got = gpu_filter(&source, &ids, size, radius);
+    // Light masks in bands across the surfaces (a shadow's edges), some with high bits set.
+    let masks: Vec<u64> = (0..37 * 23u64).map(|i| if (i % 37) / 9 % 2 == 0 { 0b101 } else { 1 << 40 | 3 }).collect();
+    for (radius, masks) in [(1, &[][..]), (3, &[][..]), (3, &masks[..])] {
+        let expected = post::filter(&source, &ids, masks, size, radius);
+        let got = gpu_filter(&source, &ids, masks, size, radius);
         for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
             assert!((*a - *b).abs().max_element() < 2e-6, "radius {radius}, pixel {i}: GPU {a}, CPU {b}");
         }
@@ -70,15 +74,31 @@ fn filter_keeps_a_sharp_id_edge_exact_and_radius_zero_is_identity() {
         .map(|&id| if id == 4 { Vec4::new(1.0, 2.0, 3.0, 1.0) } else { Vec4::new(0.0, 0.5, 0.0, 1.0) })
         .collect();
     // Mixing across the edge would move a pixel by O(1); renormalising identical values rounds at 1e-7.
-    for (i, (got, want)) in gpu_filter(&source, &ids, size, 4).iter().zip(&source).enumerate() {
+    for (i, (got, want)) in gpu_filter(&source, &ids, &[], size, 4).iter().zip(&source).enumerate() {
         assert!(
             (*got - *want).abs().max_element() <= 1e-6 * want.max_element(),
             "pixel {i}: {got} on a surface of {want}"
         );
     }
     let textured: Vec<Vec4> = (0..30 * 12).map(|i| noise(i, 7)).collect();
-    let same = gpu_filter(&textured, &ids, size, 0).iter().zip(&textured).all(|(a, b)| a == b);
+    let same = gpu_filter(&textured, &ids, &[], size, 0).iter().zip(&textured).all(|(a, b)| a == b);
     assert!(same, "radius 0 is the identity");
+}
+
+/// A shadow's edge inside one surface: lit pixels see the light points, shadowed ones do not. With the
+/// light masks the filter keeps the edge sharp; without, light bleeds into the shadow.
+#[test]
+fn filter_keeps_a_shadow_edge_inside_one_surface_sharp() {
+    let size = ImageSize { width: 30, height: 12 };
+    let ids = vec![5u32; 30 * 12];
+    let lit = |i: u32| i % 30 >= 15;
+    let source: Vec<Vec4> =
+        (0..30 * 12).map(|i| if lit(i) { Vec4::new(2.0, 2.0, 2.0, 1.0) } else { Vec4::W }).collect();
+    let masks: Vec<u64> = (0..30 * 12).map(|i| if lit(i) { 0xffff } else { 0 }).collect();
+    let kept = gpu_filter(&source, &ids, &masks, size, 3);
+    assert!(kept.iter().zip(&source).all(|(a, b)| (*a - *b).abs().max_element() <= 1e-6 * b.max_element().max(1.0)));
+    let bled = gpu_filter(&source, &ids, &[], size, 3);
+    assert!(bled[14].x > 0.1, "without masks the shadow's last pixel takes light: {}", bled[14].x);
 }
 
 #[test]

@@ -5,12 +5,13 @@ mod common;
 use glam::{Vec3, Vec4};
 use sensorlight::gbuffer::GBufferData;
 use sensorlight::gpu_types::GpuQuad;
+use sensorlight::gpu_types::MAX_GROUPS;
 use sensorlight::gpu_types::radiance_state::{INTERPOLATED, SENSED};
 use sensorlight::passes::interpolate::InterpolatePass;
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
 use sensorlight::sensors::SensorKind;
-use sensorlight::sensors::refine::{Refinement, interpolate_cpu};
+use sensorlight::sensors::refine::{Refinement, Visibility, interpolate_cpu};
 use sensorlight::vk::{Access, barrier, transfer};
 
 /// A synthetic G-buffer: every pixel a surface (ids from `id`), all facing +z.
@@ -29,17 +30,33 @@ fn gbuffer(width: u32, height: u32, id: impl Fn(u32, u32) -> u32) -> GBufferData
 
 /// Runs the refinement with "sensing" that returns `r(x, y)`; returns the sensed mask and the quads.
 fn refine(g: &GBufferData, tile: u32, dradiance: f32, r: impl Fn(u32, u32) -> f32) -> (Vec<bool>, Vec<GpuQuad>) {
+    refine_seeing(g, tile, dradiance, r, None)
+}
+
+/// [`refine`] where each sensor also sees a light group with visibility `v(x, y)`.
+fn refine_seeing(
+    g: &GBufferData,
+    tile: u32,
+    dradiance: f32,
+    r: impl Fn(u32, u32) -> f32,
+    v: Option<&dyn Fn(u32, u32) -> f32>,
+) -> (Vec<bool>, Vec<GpuQuad>) {
     let w = g.size.width;
     let mut radiance = vec![Vec4::ZERO; g.surface.len()];
+    let mut visibility: Vec<Visibility> =
+        if v.is_some() { vec![[-1.0; MAX_GROUPS]; g.surface.len()] } else { Vec::new() };
     let (mut refinement, mut pending) = Refinement::start(g, tile, dradiance);
     loop {
         for &i in &pending {
             radiance[i as usize] = Vec3::splat(r(i % w, i / w)).extend(SENSED);
+            if let Some(v) = v {
+                visibility[i as usize][0] = v(i % w, i / w);
+            }
         }
         if refinement.is_finished() {
             break;
         }
-        pending = refinement.step(&radiance);
+        pending = refinement.step(&radiance, &visibility);
     }
     let sensed = (0..g.surface.len()).map(|i| refinement.is_sensed(i)).collect();
     (sensed, refinement.interpolated().to_vec())
@@ -113,6 +130,23 @@ fn variation_decides_between_interpolating_and_splitting() {
     assert!(quads.iter().any(|q| q.x1 <= 16 && q.x1 - q.x0 == 16), "the flat left quad is interpolated whole");
     assert!(sensed[(8 * 65 + 19) as usize] || sensed[(8 * 65 + 20) as usize], "the jump is resolved to the pixel");
     assert!(!quads.iter().any(|q| q.x0 < 20 && q.x1 >= 20 && q.x1 - q.x0 > 1), "no interpolation across the jump");
+}
+
+/// A small light's shadow among brighter light: R varies less than dradiance across it, but the light's
+/// visibility does, and the quads across the shadow's edge are split to the pixel.
+#[test]
+fn a_change_in_what_a_light_group_shows_splits_a_quad_even_where_r_is_flat() {
+    let g = gbuffer(65, 17, |_, _| 1);
+    let flat = |_, _| 1.0;
+    let shadow = |x: u32, _: u32| if x < 20 { 1.0 } else { 0.2 };
+    let (_, blind) = refine(&g, 16, 0.1, flat);
+    assert!(blind.iter().any(|q| q.x0 < 20 && q.x1 > 20 && q.x1 - q.x0 == 16), "R alone interpolates across");
+    let (sensed, quads) = refine_seeing(&g, 16, 0.1, flat, Some(&shadow));
+    assert!(!quads.iter().any(|q| q.x0 < 20 && q.x1 >= 20 && q.x1 - q.x0 > 1), "no quad across the shadow's edge");
+    assert!(sensed[(8 * 65 + 19) as usize] || sensed[(8 * 65 + 20) as usize], "the edge is sensed to the pixel");
+    // A group no corner sees (−1) does not split anything.
+    let (_, unseen) = refine_seeing(&g, 16, 0.1, flat, Some(&|_, _| -1.0));
+    assert_eq!(unseen.len(), blind.len());
 }
 
 #[test]

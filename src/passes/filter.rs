@@ -1,5 +1,7 @@
 //! Id-constrained Gaussian filter (paper §III-H, docs/DESIGN.md §3 step 6): a Gaussian of radius r, σ = r/2,
-//! over the radiance map, taking only samples of the centre pixel's surface id. Shader: `glsl/filter.comp`.
+//! over the radiance map, taking only samples of the centre pixel's surface id and light mask (which points
+//! on the lights it sees, `sensors::hints`), so that light does not bleed across a shadow's edge inside one
+//! surface. Shader: `glsl/filter.comp`.
 //! CPU twin: [`crate::reference::post::filter`].
 
 use std::sync::Arc;
@@ -22,20 +24,22 @@ impl FilterPass {
         let kernel = ComputeKernel::new(
             device,
             shaders::FILTER_COMP,
-            &[(0, storage), (1, storage), (2, vk::DescriptorType::STORAGE_IMAGE)],
+            &[(0, storage), (1, storage), (2, vk::DescriptorType::STORAGE_IMAGE), (3, storage)],
             size_of::<ImagePush>() as u32,
             1,
         )?;
         Ok(Self { kernel })
     }
 
-    /// Filters `source` into `target` with the surface ids of the G-buffer (call while the GPU is idle).
-    pub fn bind(&self, device: &Device, source: &Buffer, target: &Buffer, surface_ids: &Image) {
+    /// Filters `source` into `target` with the surface ids of the G-buffer and the pixels' light masks
+    /// (64 bits each; all zero where there are none) (call while the GPU is idle).
+    pub fn bind(&self, device: &Device, source: &Buffer, target: &Buffer, surface_ids: &Image, light_masks: &Buffer) {
         self.kernel
             .writer(0)
             .storage_buffer(0, source)
             .storage_buffer(1, target)
             .storage_image(2, surface_ids.view)
+            .storage_buffer(3, light_masks)
             .apply(device);
     }
 

@@ -21,9 +21,9 @@ pub struct ReducePass {
     kernel: ComputeKernel,
     /// f32 weight per texel of one sensor's main layers ([layer][row][col]).
     weights: Buffer,
-    /// The scene's emitters and light groups.
-    emitters: Arc<Buffer>,
+    /// The scene's light groups (their ranges of emitter chunks), and how many chunks it has.
     groups: Arc<Buffer>,
+    chunks: u32,
     rd: u32,
     layout: SensorLayout,
 }
@@ -39,6 +39,8 @@ pub struct ReduceBindings<'a> {
     /// Each sensor's frame (`GpuSensor`) and its zoom views (`GpuZoom`, `[sensor][group]`).
     pub sensors: &'a Buffer,
     pub zooms: &'a Buffer,
+    /// The emitter pass's irradiance (`vec4` per sensor and chunk).
+    pub irradiance: &'a Buffer,
     /// The radiance map of the current render.
     pub radiance: &'a Buffer,
 }
@@ -54,7 +56,7 @@ impl ReducePass {
             ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
         let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
         let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        Ok(Self { kernel, weights, emitters: scene.emitters.clone(), groups: scene.groups.clone(), rd, layout })
+        Ok(Self { kernel, weights, groups: scene.groups.clone(), chunks: scene.chunk_count, rd, layout })
     }
 
     /// Binds slot `slot`'s resources (call while that slot's work is not in flight).
@@ -68,7 +70,7 @@ impl ReducePass {
             .storage_buffer(4, b.results)
             .storage_buffer(5, b.sensors)
             .storage_buffer(6, b.zooms)
-            .storage_buffer(7, &self.emitters)
+            .storage_buffer(7, b.irradiance)
             .storage_buffer(8, &self.groups)
             .apply(device);
     }
@@ -85,7 +87,8 @@ impl ReducePass {
             main_layers: self.layout.main_layers(),
             atlas_columns,
             groups: self.layout.groups,
-            _pad: [0; 3],
+            chunks: self.chunks,
+            _pad: [0; 2],
         };
         self.kernel.dispatch(enc, slot, &push, [count, 1, 1]);
     }

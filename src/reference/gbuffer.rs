@@ -4,8 +4,8 @@
 use glam::Vec4;
 use rayon::prelude::*;
 
-use super::bvh::Bvh;
 use crate::gbuffer::GBufferData;
+use crate::scene::bvh::Bvh;
 use crate::scene::{ImageSize, NO_SURFACE, Scene};
 
 pub fn cast(scene: &Scene, bvh: &Bvh, size: ImageSize) -> GBufferData {

@@ -38,12 +38,12 @@ use anyhow::{Result, ensure};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bvh::Bvh;
 use super::gbuffer;
 use super::lights::Lights;
 use super::sampling::{ScrambledSobol, cosine_hemisphere, hash};
 use crate::gbuffer::GBufferData;
 use crate::params::EstimatorParams;
+use crate::scene::bvh::Bvh;
 use crate::scene::{ImageSize, Ray, Scene};
 use crate::sensors::frame::SensorFrame;
 use crate::sensors::{SensorKind, frame};

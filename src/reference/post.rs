@@ -6,9 +6,11 @@ use glam::{Vec3, Vec4};
 use crate::gbuffer::GBufferData;
 use crate::scene::{ImageSize, NO_SURFACE, SurfaceId};
 
-/// Gaussian of radius `radius` (σ = radius/2) over `source`, only over pixels of the centre's surface id,
-/// weights renormalised over the pixels taken (paper §III-H). Background pixels and radius 0 pass through.
-pub fn filter(source: &[Vec4], ids: &[SurfaceId], size: ImageSize, radius: u32) -> Vec<Vec4> {
+/// Gaussian of radius `radius` (σ = radius/2) over `source`, only over pixels of the centre's surface id and
+/// light mask (`masks`, one per pixel, or empty for none), weights renormalised over the pixels taken (paper
+/// §III-H). Background pixels and radius 0 pass through.
+pub fn filter(source: &[Vec4], ids: &[SurfaceId], masks: &[u64], size: ImageSize, radius: u32) -> Vec<Vec4> {
+    let mask = |i: i64| masks.get(i as usize).copied().unwrap_or(0);
     let (w, h, r) = (size.width as i64, size.height as i64, radius as i64);
     let inv_two_sigma2 = if r > 0 { 1.0 / (0.5 * (r * r) as f32) } else { 0.0 };
     (0..w * h)
@@ -22,7 +24,11 @@ pub fn filter(source: &[Vec4], ids: &[SurfaceId], size: ImageSize, radius: u32) 
             for dy in -r..=r {
                 for dx in -r..=r {
                     let (qx, qy) = (x + dx, y + dy);
-                    if qx < 0 || qy < 0 || qx >= w || qy >= h || ids[(qy * w + qx) as usize] != id {
+                    if qx < 0 || qy < 0 || qx >= w || qy >= h {
+                        continue;
+                    }
+                    let j = qy * w + qx;
+                    if ids[j as usize] != id || mask(j) != mask(i) {
                         continue;
                     }
                     let k = (-((dx * dx + dy * dy) as f32) * inv_two_sigma2).exp();

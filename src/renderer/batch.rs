@@ -22,6 +22,7 @@ use serde::Serialize;
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensor, GpuSensorResult, GpuZoom};
+use crate::passes::emitters::{EmitterBindings, EmitterPass};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
 use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
 use crate::scene::Aabb;
@@ -58,9 +59,11 @@ struct Slot {
     maps: SlotMaps,
     /// Radiance-map pixel of each sensor of the batch, host-written.
     pixels: Buffer,
-    /// Each sensor's frame and its zoom views, host-written, for the reduction.
+    /// Each sensor's frame and its zoom views, host-written, for the emitter pass and the reduction.
     sensors: Buffer,
     zooms: Buffer,
+    /// The emitter pass's irradiance, per sensor and emitter chunk.
+    irradiance: Buffer,
     /// R and visibilities of each sensor of the batch (`GpuSensorResult`), device-written, host-read.
     results: Buffer,
     timestamps: Option<TimestampQueries>,
@@ -73,6 +76,8 @@ pub(crate) struct BatchRunner {
     slots: Vec<Slot>,
     next: usize,
     strategy: Box<dyn Strategy>,
+    /// The exact estimator's closed-form emitter term (`None` with the paper's).
+    emitters: Option<EmitterPass>,
     reduce: ReducePass,
     /// How far a sensor sits above its surface, and its views' near plane (world units).
     bias: f32,
@@ -105,6 +110,8 @@ impl BatchRunner {
         let strategy = sensor_maps::create(kind, device, scene, desc)?;
         let capacity = strategy.capacity() as u64;
         let reduce = ReducePass::new(device, scene, desc.layout, desc.rd, in_flight)?;
+        let emitters = desc.exact().then(|| EmitterPass::new(device, scene, in_flight)).transpose()?;
+        let irradiance_bytes = emitters.as_ref().map_or(0, |e| e.bytes_per_sensor()) * capacity;
         let groups: Vec<Aabb> =
             scene.lights.groups.iter().take(desc.layout.groups as usize).map(|g| g.bounds).collect();
         let host = |name, bytes: u64, location| {
@@ -122,6 +129,13 @@ impl BatchRunner {
                         size_of::<GpuZoom>() as u64 * capacity * groups.len() as u64,
                         MemoryLocation::CpuToGpu,
                     )?,
+                    irradiance: Buffer::new(
+                        device,
+                        "emitter irradiance",
+                        irradiance_bytes,
+                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                        MemoryLocation::GpuOnly,
+                    )?,
                     results: host(
                         "sensor results",
                         size_of::<GpuSensorResult>() as u64 * capacity,
@@ -136,6 +150,7 @@ impl BatchRunner {
             slots,
             next: 0,
             strategy,
+            emitters,
             reduce,
             bias,
             near,
@@ -157,6 +172,11 @@ impl BatchRunner {
         self.strategy.capacity()
     }
 
+    /// Whether the sensors measure light groups' visibilities (the exact estimator, a scene with lights).
+    pub fn measures_lights(&self) -> bool {
+        self.desc.exact()
+    }
+
     pub fn in_flight(&self) -> u32 {
         self.slots.len() as u32
     }
@@ -172,9 +192,15 @@ impl BatchRunner {
                 results: &slot.results,
                 sensors: &slot.sensors,
                 zooms: &slot.zooms,
+                irradiance: &slot.irradiance,
                 radiance,
             };
             self.reduce.bind(&self.device, i, &bindings);
+            if let Some(emitters) = &self.emitters {
+                let bindings =
+                    EmitterBindings { sensors: &slot.sensors, zooms: &slot.zooms, irradiance: &slot.irradiance };
+                emitters.bind(&self.device, i, &bindings);
+            }
         }
         self.radiance = Some(radiance.clone());
         self.times = BatchTimes::default();
@@ -201,7 +227,7 @@ impl BatchRunner {
                 })
                 .collect();
             let views = BatchViews::new(&frames, &self.desc.layout, self.near, &self.groups, self.desc.rd);
-            let (strategy, reduce) = (&self.strategy, &self.reduce);
+            let (strategy, emitters, reduce) = (&self.strategy, &self.emitters, &self.reduce);
             let slot = &mut self.slots[index];
             slot.pixels.write(0, chunk)?;
             slot.sensors.write(0, &views.sensors)?;
@@ -211,9 +237,13 @@ impl BatchRunner {
                 let stamp = |query, stage| timestamps.iter().for_each(|t| enc.timestamp(t, query, stage));
                 timestamps.iter().for_each(|t| enc.reset_queries(t));
                 stamp(0, vk::PipelineStageFlags::TOP_OF_PIPE);
+                // The emitters' closed form needs no map: it runs first, the maps after it.
+                if let Some(emitters) = emitters {
+                    emitters.record(enc, index, chunk.len() as u32);
+                }
                 strategy.record(enc, maps, &views, ck)?;
                 stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
-                barrier::global(enc, &[Access::ColorAttachmentWrite], &[Access::ComputeRead]);
+                barrier::global(enc, &[Access::ColorAttachmentWrite, Access::ComputeWrite], &[Access::ComputeRead]);
                 reduce.record(enc, index, strategy.map_layout(), chunk.len() as u32);
                 stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 // The results (and the radiance map) are read by the host, or copied, once the fence signals.
@@ -277,6 +307,7 @@ impl BatchRunner {
             results: &slot.results,
             sensors: &slot.sensors,
             zooms: &slot.zooms,
+            irradiance: &slot.irradiance,
             radiance: &scratch,
         };
         self.reduce.bind(&self.device, 0, &bindings);

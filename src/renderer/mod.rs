@@ -26,7 +26,7 @@ pub use stats::{RenderStats, RenderTimes};
 
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::GpuSensorResult;
+use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
 use crate::light::groups::Lights;
 use crate::params::{EstimatorKind, FrameParams, Param, ParamError};
 use crate::passes::compose::ComposePass;
@@ -34,11 +34,13 @@ use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::InterpolatePass;
 use crate::passes::sensor_maps::{CkParams, StrategyDesc, TEXEL_BYTES};
+use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene};
 use crate::sensors::SensorKind;
 use crate::sensors::frame;
+use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::layout::SensorLayout;
-use crate::sensors::refine::Refinement;
+use crate::sensors::refine::{Refinement, Visibility};
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
 
@@ -233,6 +235,9 @@ fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
 pub struct Renderer {
     // Field order is drop order: the runner waits for its batches first.
     runner: BatchRunner,
+    /// The scene's triangles and points on its lights, for the refinement's light hints (the exact
+    /// estimator with lights; else `None`).
+    hints: Option<(Bvh, Vec<LightPoint>)>,
     interpolate: InterpolatePass,
     filter: FilterPass,
     compose: ComposePass,
@@ -262,6 +267,8 @@ struct Targets {
     gbuffer: GBuffer,
     /// Shared with the batches in flight, which keep it alive until they complete.
     radiance: Arc<Buffer>,
+    /// Which light points each pixel sees, 64 bits a pixel, for the filter (zeros without hints).
+    light_masks: Buffer,
     filtered: Buffer,
     image: Buffer,
 }
@@ -294,7 +301,10 @@ impl Renderer {
         let budget = config.batch_budget(device, &layout);
         let desc = StrategyDesc { layout, rd: config.sensor_size, budget };
         let offsets = (frame::BIAS * scale, frame::NEAR * scale);
+        let hints =
+            (layout.groups > 0).then(|| (Bvh::build(&scene.mesh.triangles), hints::light_points(&gpu_scene.lights)));
         Ok(Self {
+            hints,
             runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
@@ -372,11 +382,16 @@ impl Renderer {
         let targets = Targets {
             gbuffer: gpu_gbuffer,
             radiance: Arc::new(map_buffer(&device, "radiance map", size)?),
+            light_masks: {
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+                Buffer::new(&device, "light masks", 8 * pixels as u64, usage, MemoryLocation::GpuOnly)?
+            },
             filtered: map_buffer(&device, "filtered radiance map", size)?,
             image: map_buffer(&device, "final image", size)?,
         };
         device.submit_and_wait(|enc| {
             enc.fill(&targets.radiance, 0);
+            enc.fill(&targets.light_masks, 0);
             Ok(())
         })?;
         self.runner.bind(&targets.radiance)?;
@@ -386,16 +401,34 @@ impl Renderer {
         // host keeps R only where it sensed: that is all the refinement reads.
         let sensing_start = Instant::now();
         let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
-        let (mut refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
+        let (refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
+        let t = Instant::now();
+        let mut refinement = match &self.hints {
+            Some((bvh, points)) => {
+                let (bias, near) = (frame::BIAS * self.scale, frame::NEAR * self.scale);
+                let masks = hints::hints(bvh, points, &g, bias, near);
+                transfer::write_buffer(&device, &targets.light_masks, &masks)?;
+                refinement.with_hints(masks)
+            }
+            None => refinement,
+        };
+        let hint_time = t.elapsed();
         let mut r = vec![Vec4::ZERO; pixels];
+        let exact = self.runner.measures_lights();
+        let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
         let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
-        let mut refine_time = Duration::ZERO;
+        let mut refine_time = hint_time;
         loop {
             if !pending.is_empty() {
                 progress.queued(pending.len() as u64);
                 let read_before = self.runner.times.readback_bytes;
                 let mut deliver = |p: &[u32], found: &[GpuSensorResult]| {
-                    p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
+                    for (&i, f) in p.iter().zip(found) {
+                        r[i as usize] = f.r;
+                        if exact {
+                            visibility[i as usize] = f.visibility;
+                        }
+                    }
                     progress.done(p.len() as u64);
                 };
                 self.runner.sense(&g, &pending, ck, &mut deliver)?;
@@ -407,7 +440,7 @@ impl Renderer {
                 break;
             }
             let t = Instant::now();
-            pending = refinement.step(&r);
+            pending = refinement.step(&r, &visibility);
             refine_time += t.elapsed();
         }
         let sensing_time = sensing_start.elapsed();
@@ -415,7 +448,8 @@ impl Renderer {
         // Interpolation, filter, composition: one submission.
         let post_start = Instant::now();
         self.interpolate.bind(&device, refinement.interpolated(), &targets.radiance)?;
-        self.filter.bind(&device, &targets.radiance, &targets.filtered, &targets.gbuffer.surface);
+        let filter_inputs = (&targets.gbuffer.surface, &targets.light_masks);
+        self.filter.bind(&device, &targets.radiance, &targets.filtered, filter_inputs.0, filter_inputs.1);
         self.compose.bind(&device, &targets.filtered, &targets.image, &targets.gbuffer);
         device.submit_and_wait(|enc| {
             barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);

@@ -54,7 +54,7 @@ pub struct RenderTimes {
     pub host_record_seconds: f64,
     /// Host, within sensing: waiting for batches to complete.
     pub host_wait_seconds: f64,
-    /// Host, within sensing: the refinement's decisions between rounds.
+    /// Host, within sensing: the refinement's decisions between rounds, and its light hints.
     pub host_refine_seconds: f64,
     /// Device, by timestamp queries: the sensor maps and the reduction (absent without timestamps; on CPU
     /// drivers clears may escape them).

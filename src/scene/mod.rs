@@ -2,6 +2,7 @@
 //! GPU passes, the CPU reference) is handed a [`Scene`], never a parser.
 
 pub mod builtin;
+pub mod bvh;
 pub mod camera;
 pub mod file;
 pub mod obj;

@@ -4,10 +4,12 @@
 //! - [`layout`]: which layers of the sensor-map array a sensor's faces occupy;
 //! - [`weights`]: the projected solid angle of every texel, shared by the GPU reduction and the tests;
 //! - [`refine`]: where sensors go: the grid and its adaptive refinement;
+//! - [`hints`]: which points on the lights each pixel sees, so that the refinement misses no thin light;
 //! - [`zoom`]: a sensor's zoom view of a light group, whose visibility it measures;
 //! - [`views`]: a batch of sensors' views and what the reduction needs to know of them.
 
 pub mod frame;
+pub mod hints;
 pub mod layout;
 pub mod refine;
 pub mod views;

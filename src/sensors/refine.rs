@@ -6,11 +6,12 @@
 //!
 //! ```text
 //!   x0        xm        x1         a quad is interpolated when its corners and every pixel in it share
-//!   o---------+---------o  y0      one surface id, the corner normals agree, and the relative variation
-//!   |         |         |          of R between the corners is below dradiance; otherwise the points +
-//!   +---------+---------+  ym      are sensed and the four children are judged in the next round.
-//!   |         |         |
-//!   o---------+---------o  y1      o: sensed corners
+//!   o---------+---------o  y0      one surface id and the same light hints (`sensors::hints`: which
+//!   |         |         |          points on the lights they see), the corner normals agree, and the
+//!   +---------+---------+  ym      relative variation between the corners of R, and of each light group's
+//!   |         |         |          visibility, is below dradiance; otherwise the points + are sensed and
+//!   o---------+---------o  y1      the four children are judged in the next round.
+//!                                  o: sensed corners
 //! ```
 //!
 //! Ownership: a quad fills `[x0, x1) × [y0, y1)`, and also its right column / bottom row where that is the
@@ -19,7 +20,7 @@
 use glam::{Vec3, Vec4};
 
 use crate::gbuffer::GBufferData;
-use crate::gpu_types::GpuQuad;
+use crate::gpu_types::{GpuQuad, MAX_GROUPS};
 use crate::scene::{NO_SURFACE, SurfaceId};
 
 /// Corner normals agree when every pair is within this angle.
@@ -37,12 +38,18 @@ struct Quad {
     y1: u32,
 }
 
+/// What a sensor saw of each light group: its visibility in [0, 1], or −1 where the group sends it nothing
+/// (the exact estimator's `GpuSensorResult::visibility`).
+pub type Visibility = [f32; MAX_GROUPS];
+
 /// The refinement state between rounds of sensing.
 pub struct Refinement {
     width: u32,
     height: u32,
     dradiance: f32,
     surface: Vec<SurfaceId>,
+    /// Which light points each pixel sees (`sensors::hints`); empty when not given.
+    hints: Vec<u64>,
     normal: Vec<Vec3>,
     /// Pixels sensed or queued for sensing.
     sensed: Vec<bool>,
@@ -75,6 +82,7 @@ impl Refinement {
             height: h,
             dradiance,
             surface: g.surface.clone(),
+            hints: Vec::new(),
             normal: g.normal.iter().map(|n| n.truncate()).collect(),
             sensed: vec![false; (w * h) as usize],
             active,
@@ -90,6 +98,14 @@ impl Refinement {
         (r, first)
     }
 
+    /// Also keeps apart pixels that see different points on the lights (`hints`, one mask per pixel of the
+    /// G-buffer): light narrower than a quad is not interpolated away.
+    pub fn with_hints(mut self, hints: Vec<u64>) -> Self {
+        debug_assert!(hints.len() == self.surface.len() || hints.is_empty());
+        self.hints = hints;
+        self
+    }
+
     fn index(&self, x: u32, y: u32) -> usize {
         (y * self.width + x) as usize
     }
@@ -103,9 +119,10 @@ impl Refinement {
         }
     }
 
-    /// Judges every active quad with the radiance map `r` (all queued sensors done); returns the next
-    /// sensors to place, empty when the refinement is finished.
-    pub fn step(&mut self, r: &[Vec4]) -> Vec<u32> {
+    /// Judges every active quad with the radiance map `r` (all queued sensors done) and, with the exact
+    /// estimator, what each sensor saw of each light group (`visibility`, per pixel, else empty); returns the
+    /// next sensors to place, empty when the refinement is finished.
+    pub fn step(&mut self, r: &[Vec4], visibility: &[Visibility]) -> Vec<u32> {
         let floor = *self.floor.get_or_insert_with(|| {
             let brightest = self
                 .sensed
@@ -119,7 +136,7 @@ impl Refinement {
         let mut next_quads = Vec::new();
         let mut next_sensors = Vec::new();
         for q in std::mem::take(&mut self.active) {
-            if self.can_interpolate(q, r, floor) {
+            if self.can_interpolate(q, r, visibility, floor) {
                 self.interpolated.push(self.owned(q));
                 continue;
             }
@@ -143,7 +160,7 @@ impl Refinement {
         next_sensors
     }
 
-    fn can_interpolate(&self, q: Quad, r: &[Vec4], floor: f32) -> bool {
+    fn can_interpolate(&self, q: Quad, r: &[Vec4], visibility: &[Visibility], floor: f32) -> bool {
         let corners = [self.index(q.x0, q.y0), self.index(q.x1, q.y0), self.index(q.x0, q.y1), self.index(q.x1, q.y1)];
         let id = self.surface[corners[0]];
         if id == NO_SURFACE || corners.iter().any(|&c| self.surface[c] != id) {
@@ -164,7 +181,24 @@ impl Refinement {
         if variation >= self.dradiance {
             return false;
         }
-        (q.y0..=q.y1).all(|y| (q.x0..=q.x1).all(|x| self.surface[self.index(x, y)] == id))
+        // Light a corner sees and another does not, or sees through a different share of it: a shadow's edge
+        // may lie between them even where R alone varies little (a small light among brighter ones).
+        let differs = |g: usize| {
+            let seen = corners.map(|c| visibility[c][g]);
+            let (lo, hi) = seen.iter().fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            // Unseen (−1) counts as 0: a group some corners see and others do not.
+            hi >= 0.0 && hi - lo.max(0.0) >= self.dradiance
+        };
+        if !visibility.is_empty() && (0..MAX_GROUPS).any(differs) {
+            return false;
+        }
+        let hint = self.hints.get(corners[0]).copied();
+        (q.y0..=q.y1).all(|y| {
+            (q.x0..=q.x1).all(|x| {
+                let i = self.index(x, y);
+                self.surface[i] == id && self.hints.get(i).copied() == hint
+            })
+        })
     }
 
     /// The quad with its share of the image: its right column and bottom row belong to the next quad,

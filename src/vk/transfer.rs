@@ -41,30 +41,27 @@ pub fn upload<T: bytemuck::Pod>(
     data: &[T],
     usage: vk::BufferUsageFlags,
 ) -> Result<Buffer> {
-    let bytes: &[u8] = bytemuck::cast_slice(data);
-    let buffer = Buffer::new(
-        device,
-        name,
-        bytes.len() as u64,
-        usage | vk::BufferUsageFlags::TRANSFER_DST,
-        MemoryLocation::GpuOnly,
-    )?;
-    if bytes.is_empty() {
-        return Ok(buffer);
+    let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
+    let buffer = Buffer::new(device, name, size_of_val(data) as u64, usage, MemoryLocation::GpuOnly)?;
+    write_buffer(device, &buffer, data)?;
+    Ok(buffer)
+}
+
+/// Fills the start of a device buffer with `data` through a staging buffer (waits).
+pub fn write_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, data: &[T]) -> Result<()> {
+    let bytes = size_of_val(data) as u64;
+    anyhow::ensure!(bytes <= buffer.size, "write_buffer: {bytes} bytes into a buffer of {}", buffer.size);
+    if bytes == 0 {
+        return Ok(());
     }
-    let mut staging = Buffer::new(
-        device,
-        "staging",
-        bytes.len() as u64,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        MemoryLocation::CpuToGpu,
-    )?;
+    let mut staging =
+        Buffer::new(device, "staging", bytes, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
     staging.write(0, data)?;
     device.submit_and_wait(|enc| {
-        enc.copy(&staging, &buffer, bytes.len() as u64);
+        enc.copy(&staging, buffer, bytes);
         Ok(())
     })?;
-    Ok(buffer)
+    Ok(())
 }
 
 /// Copies every layer of `image` (in `GENERAL` layout, its writers finished) to the host, layer-major, rows

@@ -1,11 +1,11 @@
 //! A bounding volume hierarchy over the scene's triangles, built with binned SAH (Wald 2007), traversed
-//! nearest child first. Leaves store copies of their triangles' vertices for locality.
+//! nearest child first. Leaves store copies of their triangles' vertices for locality. The CPU reference
+//! traces with it, and the refinement casts its shadow-ray hints (`sensors::hints`).
 
 use glam::Vec3;
 
-use super::ray::RayShear;
-use crate::scene::Ray;
-use crate::scene::{Aabb, Triangle};
+use super::ray::{Ray, RayShear};
+use super::{Aabb, Triangle};
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
