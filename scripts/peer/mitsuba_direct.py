@@ -1,0 +1,508 @@
+#!/usr/bin/env python3
+"""Render a sensorlight scene with Mitsuba 3's `direct` integrator: an independent peer for ε = 0.
+
+With `--epsilon 0`, sensorlight computes exactly direct illumination from one-sided Lambertian area
+lights onto two-sided Lambertian surfaces: pixel = Le + Kd·R, R = (1/π) ∫ Ke cosθ dω over the emitters
+visible from the point. Mitsuba's `direct` integrator (emitter and BSDF sampling, combined by MIS)
+estimates the same quantity with an unrelated code base, so it serves as a peer reference.
+
+Usage (Mitsuba lives in a venv outside the repository):
+
+    python3 -m venv /work/venv-mitsuba && /work/venv-mitsuba/bin/pip install mitsuba numpy
+    /work/venv-mitsuba/bin/python scripts/peer/mitsuba_direct.py scenes/cornell/cornell.toml \\
+        -o cornell-mitsuba.exr --spp 4096
+
+The default variant, `llvm_ad_rgb`, JIT-compiles through the system's libLLVM and needs LLVM ≥ 16
+(Dr.Jit emits `llvm.maximum`, which LLVM 14 and 15 cannot lower on x86: the process aborts with "LLVM
+ERROR: Cannot select: … fmaximum"). On Debian 12: `apt-get install libllvm19` (Dr.Jit then finds it; or
+point `DRJIT_LIBLLVM_PATH` at it). `--variant scalar_rgb` needs no LLVM; on 2 cores it was about 5× slower
+(Cornell box, 256×256, 256 spp: 3.9 s against 0.8 s).
+
+How each convention is matched
+------------------------------
+* Scene file: the TOML is read with `tomllib`; `mesh` is resolved against the TOML's directory, `[image]`
+  width/height are used unless `--width`/`--height` override them (as `sensorlight render` does).
+* Geometry: the OBJ is parsed here (not by Mitsuba's OBJ loader, to control winding and grouping):
+  `v` (first three values), `f` with `v`, `v/vt`, `v//vn`, `v/vt/vn` and negative (relative) indices,
+  polygons fan-triangulated from their first vertex (as `tobj`, sensorlight's loader, does); texture
+  coordinates and normals in the file are ignored, zero-area triangles dropped. One Mitsuba mesh per
+  material, built without vertex normals and with `face_normals`, so shading uses the flat geometric
+  normal normalize((v1 − v0) × (v2 − v0)): the counter-clockwise front, as in sensorlight.
+* Materials: every `mtllib` is read (beside the OBJ as written, else by file name beside the OBJ);
+  `Kd` is the albedo (0.8 grey when a material has no `Kd`, is undefined, or no `usemtl` was given,
+  sensorlight's default) and `Ke` the emitted radiance (0 when absent). Every surface gets a `twosided`
+  `diffuse` BSDF of reflectance Kd (other surfaces reflect on both sides); emitters keep that BSDF too,
+  so their own reflected light adds to Le, as sensorlight's Le + Kd·R does.
+* Emitters: a material with any Ke component > 0 gets an `area` emitter of radiance Ke (linear RGB).
+  Mitsuba's area emitter is one-sided: it emits only towards the side its geometric normal points to,
+  i.e. the counter-clockwise front, sensorlight's convention.
+* Colour: the `*_rgb` variants render linear RGB with no spectral upsampling, so Kd and Ke are used as
+  given (an RGB reflectance above 1 is not clamped in these variants).
+* Camera: `perspective` with `to_world = look_at(eye, target, up)`, `fov` = the scene's `vfov_deg`
+  and `fov_axis = 'y'` (the *vertical* full angle, as sensorlight's `vfov_deg`), so for any aspect
+  ratio the image plane spans the same ±tan(vfov/2)·aspect horizontally. Mitsuba's look_at orients the
+  image like sensorlight (right = forward × up, row 0 at the top). Near and far clip planes are set from
+  the scene's bounding box so nothing in the scene is clipped.
+* Background: black (no environment emitter); a scene's `[render] background` is refused unless it is
+  zero, since the scenes used for comparison are closed rooms.
+* Film: `hdrfilm`, RGB, float32, written as a linear OpenEXR with channels R, G, B (what
+  `sensorlight compare` reads). `--pixel-sampling box` (the default) renders with the `box`
+  reconstruction filter (radius ½ pixel): each pixel is the plain average of samples spread uniformly
+  over its area. `--pixel-sampling centre` instead shoots every sample through the pixel centre
+  (i + ½, j + ½), exactly where sensorlight's G-buffer samples; it needs an `llvm_*` variant.
+* Sampling: `--spp` samples per pixel with the `independent` sampler seeded by `--seed`; the direct
+  integrator takes one emitter and one BSDF sample per camera sample (MIS). `--variant` picks the
+  Mitsuba variant (default `llvm_ad_rgb`, the vectorised CPU backend, when available).
+
+What cannot match
+-----------------
+* Silhouettes and other discontinuities inside a pixel. sensorlight point-samples pixel centres; with
+  `--pixel-sampling box` Mitsuba averages over the pixel area, so pixels straddling a silhouette, and
+  pixels crossed by a hard shadow edge, differ. Mask silhouettes when comparing (e.g. `compare.py`: a 3×3
+  neighbourhood of differing `surface_id` from a sensorlight render with `--aovs`); shadow edges are not
+  caught by that mask, which is why `--pixel-sampling centre` exists. Even with centre sampling, a ray
+  that grazes an edge can be resolved differently by Mitsuba's ray tracer and sensorlight's rasteriser.
+* Noise: Mitsuba is Monte Carlo; its error falls as 1/√spp. Estimate it by rendering twice with
+  different `--seed` values (relative RMSE between the two ÷ √2 is the noise of one).
+* Self-intersection offsets and near-plane handling differ between the two renderers; this matters only
+  at contact edges (a box standing on a floor), within a pixel or so of them.
+* Anything a sensorlight scene's `[render]` table sets for the algorithm (sensor kind, ε, …) is
+  irrelevant here: this is always ε = 0, the exact direct illumination.
+
+The time taken (scene load, render, total) is printed on stdout, and with `--json` written to a file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+DEFAULT_KD = 0.8
+
+
+class SceneError(Exception):
+    """A problem in the scene files, with the file (and line) it came from."""
+
+
+@dataclass
+class Material:
+    name: str
+    kd: tuple[float, float, float] = (DEFAULT_KD, DEFAULT_KD, DEFAULT_KD)
+    ke: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def is_emitter(self) -> bool:
+        return max(self.ke) > 0.0
+
+
+@dataclass
+class Mesh:
+    """Triangles grouped by material name (None = no usemtl / undefined: default grey)."""
+
+    materials: dict[str, Material] = field(default_factory=dict)
+    triangles: dict[str | None, list[tuple[tuple[float, ...], ...]]] = field(default_factory=dict)
+    dropped_degenerate: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+
+def parse_floats(values: list[str], where: str) -> list[float]:
+    try:
+        return [float(v) for v in values]
+    except ValueError as e:
+        raise SceneError(f"{where}: {e}") from None
+
+
+def load_mtl(path: Path, materials: dict[str, Material]) -> None:
+    current: Material | None = None
+    for line_no, raw in enumerate(path.read_text().splitlines(), 1):
+        words = raw.split("#", 1)[0].split()
+        if not words:
+            continue
+        where = f"{path}:{line_no}"
+        key, args = words[0], words[1:]
+        if key == "newmtl":
+            if not args:
+                raise SceneError(f"{where}: 'newmtl' needs a name")
+            current = Material(args[0])
+            materials[current.name] = current
+        elif key in ("Kd", "Ke"):
+            if current is None:
+                raise SceneError(f"{where}: '{key}' before any 'newmtl'")
+            values = parse_floats(args, where)
+            if len(values) != 3 or any(not math.isfinite(v) or v < 0 for v in values):
+                raise SceneError(f"{where}: '{key}' needs 3 finite non-negative numbers")
+            if key == "Kd":
+                current.kd = tuple(values)
+            else:
+                current.ke = tuple(values)
+
+
+def find_mtl(obj_dir: Path, name: str, mesh: Mesh) -> Path | None:
+    as_written = obj_dir / name
+    if as_written.is_file():
+        return as_written
+    by_name = obj_dir / Path(name).name
+    if by_name.is_file():
+        mesh.warnings.append(f"mtllib '{name}' found by file name as {by_name}")
+        return by_name
+    mesh.warnings.append(f"material library '{name}' not found in {obj_dir}; its materials are grey")
+    return None
+
+
+def face_index(token: str, count: int, where: str) -> int:
+    """0-based vertex index of one `f` token (`v`, `v/vt`, `v//vn`, `v/vt/vn`; negative = relative)."""
+    text = token.split("/", 1)[0]
+    try:
+        i = int(text)
+    except ValueError:
+        raise SceneError(f"{where}: face vertex '{token}' is not an index") from None
+    if 0 < i <= count:
+        return i - 1
+    if 0 < -i <= count:
+        return count + i
+    raise SceneError(f"{where}: vertex index {i} does not refer to one of the {count} defined so far")
+
+
+def load_obj(path: Path) -> Mesh:
+    if not path.is_file():
+        raise SceneError(f"mesh {path} not found")
+    mesh = Mesh()
+    vertices: list[tuple[float, float, float]] = []
+    material: str | None = None
+    for line_no, raw in enumerate(path.read_text().splitlines(), 1):
+        words = raw.split("#", 1)[0].split()
+        if not words:
+            continue
+        where = f"{path}:{line_no}"
+        key, args = words[0], words[1:]
+        if key == "v":
+            values = parse_floats(args, where)
+            if len(values) not in (3, 4, 6):
+                raise SceneError(f"{where}: 'v' takes 3 coordinates (optionally w, or r g b)")
+            vertices.append(tuple(values[:3]))
+        elif key == "f":
+            if len(args) < 3:
+                raise SceneError(f"{where}: a face needs at least 3 vertices")
+            idx = [face_index(a, len(vertices), where) for a in args]
+            tris = mesh.triangles.setdefault(material, [])
+            for k in range(1, len(idx) - 1):  # fan from the first vertex, as tobj triangulates
+                tri = (vertices[idx[0]], vertices[idx[k]], vertices[idx[k + 1]])
+                if triangle_area2(tri) > 0.0:
+                    tris.append(tri)
+                else:
+                    mesh.dropped_degenerate += 1
+        elif key == "usemtl":
+            if not args:
+                raise SceneError(f"{where}: 'usemtl' needs a material name")
+            material = args[0]
+        elif key == "mtllib":
+            for name in args:
+                found = find_mtl(path.parent, name, mesh)
+                if found is not None:
+                    load_mtl(found, mesh.materials)
+        # g, o, s, vt, vn, l, p and the free-form statements carry nothing this renderer uses.
+    undefined = sorted(m for m in mesh.triangles if m is not None and m not in mesh.materials)
+    for name in undefined:
+        mesh.warnings.append(f"material '{name}' is not defined in any MTL file; using grey Kd {DEFAULT_KD}")
+    if not any(mesh.triangles.values()):
+        raise SceneError(f"{path}: the mesh contains no triangles of non-zero area")
+    return mesh
+
+
+def triangle_area2(tri) -> float:
+    (ax, ay, az), (bx, by, bz), (cx, cy, cz) = tri
+    ux, uy, uz = bx - ax, by - ay, bz - az
+    vx, vy, vz = cx - ax, cy - ay, cz - az
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    return nx * nx + ny * ny + nz * nz
+
+
+@dataclass
+class SceneSpec:
+    path: Path
+    mesh: Mesh
+    eye: list[float]
+    target: list[float]
+    up: list[float]
+    vfov_deg: float
+    width: int
+    height: int
+
+
+def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(f"scene file {path} not found") from None
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{path}: {e}") from None
+    try:
+        cam = doc["camera"]
+        eye, target = [float(x) for x in cam["eye"]], [float(x) for x in cam["target"]]
+        up = [float(x) for x in cam.get("up", [0, 1, 0])]
+        vfov = float(cam["vfov_deg"])
+        image = doc["image"]
+        w, h = int(width or image["width"]), int(height or image["height"])
+        mesh_name = doc["mesh"]
+    except KeyError as e:
+        raise SceneError(f"{path}: missing key {e}") from None
+    if not 0 < vfov < 180:
+        raise SceneError(f"{path}: [camera] vfov_deg must lie in (0, 180), got {vfov}")
+    if w < 1 or h < 1:
+        raise SceneError(f"{path}: image width and height must be at least 1")
+    background = doc.get("render", {}).get("background", [0, 0, 0])
+    if any(float(b) != 0 for b in background):
+        raise SceneError(f"{path}: [render] background {background} is not black; this peer renders none")
+    mesh = load_obj(path.parent / mesh_name)
+    return SceneSpec(path, mesh, eye, target, up, vfov, w, h)
+
+
+def choose_variant(requested: str | None, pixel_sampling: str) -> str:
+    import mitsuba as mi
+
+    available = mi.variants()
+    if requested:
+        if requested not in available:
+            raise SceneError(f"Mitsuba variant '{requested}' is not available here (have: {', '.join(available)})")
+        variant = requested
+    else:
+        variant = "llvm_ad_rgb" if "llvm_ad_rgb" in available else "scalar_rgb"
+    if not variant.endswith("_rgb"):
+        raise SceneError(f"variant '{variant}': use an RGB variant (scalar_rgb, llvm_ad_rgb) so Kd, Ke stay RGB")
+    if pixel_sampling == "centre" and not variant.startswith("llvm"):
+        raise SceneError("--pixel-sampling centre needs an llvm_* variant (it traces whole wavefronts)")
+    return variant
+
+
+def build_scene(spec: SceneSpec, spp: int, seed: int):
+    """The Mitsuba scene: one mesh per material, the camera, the film, the direct integrator."""
+    import mitsuba as mi
+    import numpy as np
+
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    shapes = {}
+    for k, (name, tris) in enumerate(sorted(spec.mesh.triangles.items(), key=lambda kv: str(kv[0]))):
+        if not tris:
+            continue
+        material = spec.mesh.materials.get(name) if name is not None else None
+        material = material or Material(name or "(default grey)")
+        positions = np.asarray(tris, dtype=np.float32).reshape(-1, 3)
+        lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
+        faces = np.arange(len(positions), dtype=np.uint32)
+        props = mi.Properties()
+        props["face_normals"] = True
+        props["bsdf"] = mi.load_dict(
+            {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(material.kd)}}}
+        )
+        if material.is_emitter:
+            props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": list(material.ke)}})
+        shape = mi.Mesh(
+            f"m{k}_{material.name}",
+            vertex_count=len(positions),
+            face_count=len(tris),
+            has_vertex_normals=False,
+            has_vertex_texcoords=False,
+            props=props,
+        )
+        params = mi.traverse(shape)
+        # The parameter types differ by variant (dr.scalar.ArrayXf, mi.Float, …): build each as its own type.
+        params["vertex_positions"] = type(params["vertex_positions"])(positions.ravel())
+        params["faces"] = type(params["faces"])(faces)
+        params.update()
+        shapes[f"m{k}"] = shape
+    eye = np.asarray(spec.eye, dtype=np.float64)
+    far = float(np.max(np.linalg.norm(np.stack([lo, hi]) - eye, axis=1)) * 4.0 + 1.0)
+    diag = float(np.linalg.norm(hi - lo))
+    scene_dict = {
+        "type": "scene",
+        "integrator": {"type": "direct"},
+        "sensor": {
+            "type": "perspective",
+            "fov": spec.vfov_deg,
+            "fov_axis": "y",
+            "near_clip": diag * 1e-5,
+            "far_clip": far + diag,
+            "to_world": mi.ScalarTransform4f().look_at(origin=spec.eye, target=spec.target, up=spec.up),
+            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+            "film": {
+                "type": "hdrfilm",
+                "width": spec.width,
+                "height": spec.height,
+                "pixel_format": "rgb",
+                "component_format": "float32",
+                "rfilter": {"type": "box"},
+            },
+        },
+        **shapes,
+    }
+    return mi.load_dict(scene_dict)
+
+
+def render_centres(scene, spec: SceneSpec, spp: int, seed: int):
+    """Every sample through the pixel centre (as sensorlight's G-buffer), averaged: an (h, w, 3) array."""
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+
+    sensor, integrator = scene.sensors()[0], scene.integrator()
+    w, h = spec.width, spec.height
+    n = w * h
+    per_pass = max(1, min(spp, (1 << 21) // n))  # samples of each pixel per wavefront, ≤ ~2M lanes
+    sampler = mi.load_dict({"type": "independent"})
+    total = np.zeros((n, 3), dtype=np.float64)
+    done, pass_index = 0, 0
+    while done < spp:
+        k = min(per_pass, spp - done)
+        # Sample-major lanes (lane = s·n + pixel); measured faster here than pixel-major on LLVM.
+        pixel = dr.arange(mi.UInt32, n * k) % n
+        x, y = pixel % w, pixel // w
+        position = mi.Point2f((mi.Float(x) + 0.5) / w, (mi.Float(y) + 0.5) / h)
+        sampler.seed(seed * 1_000_003 + pass_index, n * k)
+        ray, weight = sensor.sample_ray(0.0, 0.5, position, mi.Point2f(0.5, 0.5))
+        radiance, _, _ = integrator.sample(scene, sampler, ray)
+        value = radiance * weight
+        dr.eval(value)  # one kernel for all three channels (converting each alone would trace it thrice)
+        arr = np.stack([np.asarray(value[c]) for c in range(3)], axis=1).reshape(k, n, 3)
+        total += arr.sum(axis=0, dtype=np.float64)
+        done += k
+        pass_index += 1
+    return (total / spp).reshape(h, w, 3).astype(np.float32)
+
+
+def emission_at_centres(scene, spec: SceneSpec):
+    """Le seen through each pixel centre (0 off emitters and on their backs): an (h, w, 3) array.
+
+    Written as the `emission.*` layer so that comparisons can leave emitter pixels out (their value is
+    dominated by Le, which every renderer gets right) and subtract Le where they need Kd·R alone."""
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+
+    sensor = scene.sensors()[0]
+    w, h = spec.width, spec.height
+    if dr.size_v(mi.Float) == 1:  # scalar variant: one ray at a time
+        out = np.zeros((h, w, 3), dtype=np.float32)
+        for y in range(h):
+            for x in range(w):
+                ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f((x + 0.5) / w, (y + 0.5) / h), mi.Point2f(0.5, 0.5))
+                si = scene.ray_intersect(ray)
+                emitter = si.emitter(scene)
+                if si.is_valid() and emitter is not None:
+                    out[y, x] = np.array(emitter.eval(si))
+        return out
+    pixel = dr.arange(mi.UInt32, w * h)
+    position = mi.Point2f((mi.Float(pixel % w) + 0.5) / w, (mi.Float(pixel // w) + 0.5) / h)
+    ray, _ = sensor.sample_ray(0.0, 0.5, position, mi.Point2f(0.5, 0.5))
+    si = scene.ray_intersect(ray)
+    le = si.emitter(scene).eval(si, si.is_valid())
+    dr.eval(le)
+    return np.stack([np.asarray(le[c]) for c in range(3)], axis=1).reshape(h, w, 3).astype(np.float32)
+
+
+def write_exr(path: Path, image, emission) -> None:
+    """R, G, B = the render; emission.R/G/B = Le at the pixel centres. Written atomically."""
+    import mitsuba as mi
+    import numpy as np
+
+    channels = np.concatenate([image, emission], axis=2)
+    names = ["R", "G", "B", "emission.R", "emission.G", "emission.B"]
+    bitmap = mi.Bitmap(
+        np.ascontiguousarray(channels, dtype=np.float32),
+        pixel_format=mi.Bitmap.PixelFormat.MultiChannel,
+        channel_names=names,
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.exr")
+    bitmap.write(str(tmp))
+    tmp.replace(path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawTextHelpFormatter)
+    parser.add_argument("scene", type=Path, help="sensorlight scene file (TOML)")
+    parser.add_argument("-o", "--output", type=Path, required=True, help="output EXR (linear RGB)")
+    parser.add_argument("--spp", type=int, default=256, help="samples per pixel (default 256)")
+    parser.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
+    parser.add_argument("--width", type=int, help="image width (default: the scene's)")
+    parser.add_argument("--height", type=int, help="image height (default: the scene's)")
+    parser.add_argument("--variant", help="Mitsuba variant (default llvm_ad_rgb if available, else scalar_rgb)")
+    parser.add_argument(
+        "--pixel-sampling",
+        choices=["box", "centre"],
+        default="box",
+        help="box: box filter over each pixel (default); centre: every sample through the pixel centre",
+    )
+    parser.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+    parser.add_argument("--json", type=Path, help="also write the timings and settings as JSON here")
+    args = parser.parse_args(argv)
+    if args.spp < 1:
+        parser.error("--spp must be at least 1")
+    for name in ("width", "height"):
+        if getattr(args, name) is not None and getattr(args, name) < 1:
+            parser.error(f"--{name} must be at least 1")
+    if args.output.suffix.lower() != ".exr":
+        parser.error(f"--output {args.output} must end in .exr")
+
+    try:
+        import mitsuba as mi
+    except ImportError:
+        print("error: mitsuba is not installed in this Python; see the usage in this script's docstring", file=sys.stderr)
+        return 2
+    try:
+        variant = choose_variant(args.variant, args.pixel_sampling)
+        mi.set_variant(variant)
+        if args.threads:
+            import drjit as dr
+
+            dr.set_thread_count(args.threads)
+        t0 = time.perf_counter()
+        spec = load_scene(args.scene, args.width, args.height)
+        for w in spec.mesh.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+        if spec.mesh.dropped_degenerate:
+            print(f"warning: dropped {spec.mesh.dropped_degenerate} degenerate triangle(s)", file=sys.stderr)
+        scene = build_scene(spec, args.spp, args.seed)
+        t1 = time.perf_counter()
+        if args.pixel_sampling == "centre":
+            image = render_centres(scene, spec, args.spp, args.seed)
+        else:
+            import numpy as np
+
+            image = np.asarray(mi.render(scene, spp=args.spp, seed=args.seed))
+        t2 = time.perf_counter()
+        write_exr(args.output, image, emission_at_centres(scene, spec))
+    except SceneError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    timings = {
+        "scene": str(args.scene),
+        "output": str(args.output),
+        "variant": variant,
+        "spp": args.spp,
+        "seed": args.seed,
+        "pixel_sampling": args.pixel_sampling,
+        "width": spec.width,
+        "height": spec.height,
+        "triangles": sum(len(t) for t in spec.mesh.triangles.values()),
+        "load_s": round(t1 - t0, 4),
+        "render_s": round(t2 - t1, 4),
+        "total_s": round(time.perf_counter() - t0, 4),
+    }
+    print(
+        f"{args.output}: {spec.width}x{spec.height}, {args.spp} spp, {variant}, {args.pixel_sampling} pixels: "
+        f"load {timings['load_s']:.3f} s, render {timings['render_s']:.3f} s, total {timings['total_s']:.3f} s"
+    )
+    if args.json:
+        args.json.write_text(json.dumps(timings, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
