@@ -51,7 +51,9 @@ How each convention is matched
   over its area. `--pixel-sampling centre` instead shoots every sample through the pixel centre
   (i + ½, j + ½), exactly where sensorlight's G-buffer samples; it needs an `llvm_*` variant.
 * Sampling: `--spp` samples per pixel with the `independent` sampler seeded by `--seed`; the direct
-  integrator takes one emitter and one BSDF sample per camera sample (MIS). `--variant` picks the
+  integrator takes `--emitter-samples` emitter and `--bsdf-samples` BSDF samples (default 1 each) per
+  camera sample and combines them by MIS. For a dark scene lit in a few pixels (door-ajar),
+  `--pixel-mask EARLIER.exr` spends the samples on the pixels that an earlier render found lit. `--variant` picks the
   Mitsuba variant (default `llvm_ad_rgb`, the vectorised CPU backend, when available).
 
 What cannot match
@@ -280,7 +282,7 @@ def choose_variant(requested: str | None, pixel_sampling: str) -> str:
     return variant
 
 
-def build_scene(spec: SceneSpec, spp: int, seed: int):
+def build_scene(spec: SceneSpec, spp: int, seed: int, emitter_samples: int = 1, bsdf_samples: int = 1):
     """The Mitsuba scene: one mesh per material, the camera, the film, the direct integrator."""
     import mitsuba as mi
     import numpy as np
@@ -322,7 +324,7 @@ def build_scene(spec: SceneSpec, spp: int, seed: int):
     diag = float(np.linalg.norm(hi - lo))
     scene_dict = {
         "type": "scene",
-        "integrator": {"type": "direct"},
+        "integrator": {"type": "direct", "emitter_samples": emitter_samples, "bsdf_samples": bsdf_samples},
         "sensor": {
             "type": "perspective",
             "fov": spec.vfov_deg,
@@ -345,15 +347,21 @@ def build_scene(spec: SceneSpec, spp: int, seed: int):
     return mi.load_dict(scene_dict)
 
 
-def render_centres(scene, spec: SceneSpec, spp: int, seed: int):
-    """Every sample through the pixel centre (as sensorlight's G-buffer), averaged: an (h, w, 3) array."""
+def render_centres(scene, spec: SceneSpec, spp: int, seed: int, only=None):
+    """Every sample through the pixel centre (as sensorlight's G-buffer), averaged: an (h, w, 3) array.
+
+    `only`, an (h, w) bool array, restricts the work to those pixels (the others are 0)."""
     import drjit as dr
     import mitsuba as mi
     import numpy as np
 
     sensor, integrator = scene.sensors()[0], scene.integrator()
     w, h = spec.width, spec.height
-    n = w * h
+    chosen = np.flatnonzero(only.ravel()) if only is not None else np.arange(w * h)
+    n = len(chosen)
+    if n == 0:
+        return np.zeros((h, w, 3), dtype=np.float32)
+    chosen_dr = mi.UInt32(chosen.astype(np.uint32))
     per_pass = max(1, min(spp, (1 << 21) // n))  # samples of each pixel per wavefront, ≤ ~2M lanes
     sampler = mi.load_dict({"type": "independent"})
     total = np.zeros((n, 3), dtype=np.float64)
@@ -361,7 +369,7 @@ def render_centres(scene, spec: SceneSpec, spp: int, seed: int):
     while done < spp:
         k = min(per_pass, spp - done)
         # Sample-major lanes (lane = s·n + pixel); measured faster here than pixel-major on LLVM.
-        pixel = dr.arange(mi.UInt32, n * k) % n
+        pixel = dr.gather(mi.UInt32, chosen_dr, dr.arange(mi.UInt32, n * k) % n)
         x, y = pixel % w, pixel // w
         position = mi.Point2f((mi.Float(x) + 0.5) / w, (mi.Float(y) + 0.5) / h)
         sampler.seed(seed * 1_000_003 + pass_index, n * k)
@@ -373,7 +381,9 @@ def render_centres(scene, spec: SceneSpec, spp: int, seed: int):
         total += arr.sum(axis=0, dtype=np.float64)
         done += k
         pass_index += 1
-    return (total / spp).reshape(h, w, 3).astype(np.float32)
+    image = np.zeros((w * h, 3), dtype=np.float32)
+    image[chosen] = total / spp
+    return image.reshape(h, w, 3)
 
 
 def emission_at_centres(scene, spec: SceneSpec):
@@ -404,6 +414,23 @@ def emission_at_centres(scene, spec: SceneSpec):
     le = si.emitter(scene).eval(si, si.is_valid())
     dr.eval(le)
     return np.stack([np.asarray(le[c]) for c in range(3)], axis=1).reshape(h, w, 3).astype(np.float32)
+
+
+def read_mask(path: Path, spec: SceneSpec):
+    """Pixels where the EXR at `path` has R + G + B > 0, as an (h, w) bool array."""
+    import mitsuba as mi
+    import numpy as np
+
+    if not path.is_file():
+        raise SceneError(f"--pixel-mask {path}: no such file")
+    bitmap = mi.Bitmap(str(path))
+    data = np.array(bitmap)
+    names = [bitmap.struct_()[i].name for i in range(data.shape[2])]
+    if not all(c in names for c in "RGB"):
+        raise SceneError(f"--pixel-mask {path}: no R, G, B channels")
+    if data.shape[:2] != (spec.height, spec.width):
+        raise SceneError(f"--pixel-mask {path} is {data.shape[1]}x{data.shape[0]}, the image {spec.width}x{spec.height}")
+    return sum(data[:, :, names.index(c)] for c in "RGB") > 0
 
 
 def write_exr(path: Path, image, emission) -> None:
@@ -439,6 +466,16 @@ def main(argv: list[str] | None = None) -> int:
         default="box",
         help="box: box filter over each pixel (default); centre: every sample through the pixel centre",
     )
+    parser.add_argument(
+        "--emitter-samples", type=int, default=1, help="emitter (light) samples per camera sample (default 1)"
+    )
+    parser.add_argument("--bsdf-samples", type=int, default=1, help="BSDF samples per camera sample (default 1)")
+    parser.add_argument(
+        "--pixel-mask",
+        type=Path,
+        help="with --pixel-sampling centre: render only the pixels where this EXR's R+G+B > 0 (e.g. an\n"
+        "earlier render, to spend many samples on the few lit pixels of a dark scene); the rest are 0",
+    )
     parser.add_argument("--threads", type=int, help="worker threads (default: all cores)")
     parser.add_argument("--json", type=Path, help="also write the timings and settings as JSON here")
     args = parser.parse_args(argv)
@@ -447,6 +484,10 @@ def main(argv: list[str] | None = None) -> int:
     for name in ("width", "height"):
         if getattr(args, name) is not None and getattr(args, name) < 1:
             parser.error(f"--{name} must be at least 1")
+    if args.emitter_samples < 0 or args.bsdf_samples < 0 or args.emitter_samples + args.bsdf_samples == 0:
+        parser.error("--emitter-samples and --bsdf-samples must be ≥ 0, and not both 0")
+    if args.pixel_mask and args.pixel_sampling != "centre":
+        parser.error("--pixel-mask needs --pixel-sampling centre")
     if args.output.suffix.lower() != ".exr":
         parser.error(f"--output {args.output} must end in .exr")
 
@@ -468,10 +509,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {w}", file=sys.stderr)
         if spec.mesh.dropped_degenerate:
             print(f"warning: dropped {spec.mesh.dropped_degenerate} degenerate triangle(s)", file=sys.stderr)
-        scene = build_scene(spec, args.spp, args.seed)
+        scene = build_scene(spec, args.spp, args.seed, args.emitter_samples, args.bsdf_samples)
+        only = read_mask(args.pixel_mask, spec) if args.pixel_mask else None
         t1 = time.perf_counter()
         if args.pixel_sampling == "centre":
-            image = render_centres(scene, spec, args.spp, args.seed)
+            image = render_centres(scene, spec, args.spp, args.seed, only)
         else:
             import numpy as np
 
@@ -488,6 +530,10 @@ def main(argv: list[str] | None = None) -> int:
         "spp": args.spp,
         "seed": args.seed,
         "pixel_sampling": args.pixel_sampling,
+        "emitter_samples": args.emitter_samples,
+        "bsdf_samples": args.bsdf_samples,
+        "pixel_mask": str(args.pixel_mask) if args.pixel_mask else None,
+        "pixels_rendered": int(only.sum()) if only is not None else spec.width * spec.height,
         "width": spec.width,
         "height": spec.height,
         "triangles": sum(len(t) for t in spec.mesh.triangles.values()),
