@@ -37,7 +37,7 @@ How each convention is matched
   Mitsuba's area emitter is one-sided: it emits only towards the side its geometric normal points to,
   i.e. the counter-clockwise front, sensorlight's convention.
 * Colour: the `*_rgb` variants render linear RGB with no spectral upsampling, so Kd and Ke are used as
-  given (an RGB reflectance above 1 is not clamped in these variants).
+  given. Mitsuba refuses a reflectance above 1, which sensorlight accepts: such a scene is an error here.
 * Camera: `perspective` with `to_world = look_at(eye, target, up)`, `fov` = the scene's `vfov_deg`
   and `fov_axis = 'y'` (the *vertical* full angle, as sensorlight's `vfov_deg`), so for any aspect
   ratio the image plane spans the same ±tan(vfov/2)·aspect horizontally. Mitsuba's look_at orients the
@@ -295,6 +295,8 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, emitter_samples: int = 1, 
             continue
         material = spec.mesh.materials.get(name) if name is not None else None
         material = material or Material(name or "(default grey)")
+        if max(material.kd) > 1.0:
+            raise SceneError(f"material '{material.name}': Kd {material.kd} exceeds 1, which Mitsuba refuses")
         positions = np.asarray(tris, dtype=np.float32).reshape(-1, 3)
         lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
         faces = np.arange(len(positions), dtype=np.uint32)
