@@ -23,6 +23,7 @@ fn picture(name: &str, size: ImageSize, rgb: &[Vec4], ids: Option<&[u32]>, noise
         rgb: triple(rgb),
         surface_id: ids.map(|ids| ids.iter().map(|&i| i as f32).collect()),
         std_error: noise.map(triple),
+        emitter: None,
     }
 }
 

@@ -15,6 +15,8 @@ use std::sync::Arc;
 use anyhow::{Context as _, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use sensorlight::gbuffer::GBufferData;
+use sensorlight::output::exr::ExrImage;
 use sensorlight::params::{Overrides, ParamError, RenderParams};
 use sensorlight::renderer::Progress;
 use sensorlight::scene::Scene;
@@ -146,6 +148,12 @@ impl Progress for SensorBar {
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
+/// The G-buffer channels that let `compare` mask what it should not judge: `surface_id` (silhouettes) and
+/// `emission.*` (emitters, whose `Le` is given, not estimated).
+fn gbuffer_aovs(exr: ExrImage, g: &GBufferData) -> ExrImage {
+    exr.rgb("emission", &g.emission).scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
+}
+
 fn progress_bar(total: u64, unit: &str) -> ProgressBar {
     let bar = ProgressBar::new(total);
     let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");

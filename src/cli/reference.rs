@@ -70,8 +70,8 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     // Both files or neither: staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    ExrImage::new(size.width, size.height)
-        .rgb("", &result.image)
+    let exr = ExrImage::new(size.width, size.height).rgb("", &result.image);
+    super::gbuffer_aovs(exr, &result.gbuffer)
         .rgb("radiance", &result.radiance)
         .rgb("std_error", &result.image_std_error())
         .rgb("radiance_std_error", &result.std_error)

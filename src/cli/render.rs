@@ -30,7 +30,7 @@ pub struct RenderArgs {
     sensor_size: Option<u32>,
     #[command(flatten)]
     refinement: RefinementFlags,
-    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), surface_id
+    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*, surface_id
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -137,10 +137,7 @@ fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -
             w if w == radiance_state::INTERPOLATED => 0.5,
             _ => 0.0,
         });
-        exr = exr
-            .rgb("radiance", &out.radiance)
-            .scalar("sensor_mask", mask.collect())
-            .scalar("surface_id", out.gbuffer.surface.iter().map(|&s| s as f32).collect());
+        exr = super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();

@@ -11,6 +11,11 @@
 //! - **Silhouettes** are masked where either image has a `surface_id` channel: a pixel whose 3 × 3
 //!   neighbourhood holds another id there. Renderers filter pixels differently along an edge, which is not
 //!   what a comparison of lighting should measure. The masked pixels are counted and reported.
+//! - **Emitters** are left out where either image has an `emission` layer (`emission.R/G/B`: what the pixel
+//!   itself emits, as `render --aovs` and the Mitsuba peer write): their `Le` is given, not estimated, and
+//!   would dilute the figure.
+//! - **Leaks**: pixels the reference leaves black (luminance 0) that the image lights above the lit
+//!   threshold. A figure over lit pixels cannot see light where there should be none; this count does.
 //! - Also reported: the mean absolute relative error (per pixel, luminance), the bias
 //!   `(ΣYa − ΣYb) / ΣYb`, and the former headline, the L2 ratio `sqrt(Σ|a − b|² / Σ|b|²)` over the RGB of
 //!   the lit pixels, which the brightest pixels dominate.
@@ -44,6 +49,8 @@ pub struct Picture {
     /// The standard error of `rgb` where the image is an estimate that knows its own noise (the CPU
     /// reference).
     pub std_error: Option<Vec<[f32; 3]>>,
+    /// Whether each pixel shows an emitter's front (its `emission` layer is not black), where known.
+    pub emitter: Option<Vec<bool>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -60,7 +67,7 @@ pub struct Agreement {
     pub pixels: usize,
     /// Pixels compared: lit and not masked.
     pub lit_pixels: usize,
-    /// Pixels left out as silhouettes (`surface_id` changes in their 3 × 3 neighbourhood).
+    /// Pixels left out: silhouettes (`surface_id` changes in their 3 × 3 neighbourhood) and emitters.
     pub masked_pixels: usize,
     /// Whether a `surface_id` channel was found (in either image) to mask silhouettes with.
     pub surface_ids: bool,
@@ -70,6 +77,10 @@ pub struct Agreement {
     pub reference_noise: Option<f64>,
     /// The image's own error, the reference's noise removed: `sqrt(max(0, RMSE² − noise²))`.
     pub own_error: Option<f64>,
+    /// Emitter pixels left out (an `emission` layer in either image).
+    pub emitter_pixels: usize,
+    /// Pixels black in the reference that the image lights above the lit threshold.
+    pub leaked_pixels: usize,
 }
 
 impl Picture {
@@ -90,7 +101,10 @@ impl Picture {
         let noise = if layer.is_empty() { "std_error".to_owned() } else { format!("{layer}_std_error") };
         let error: Option<Vec<Vec<f32>>> = ["R", "G", "B"].iter().map(|c| take(&format!("{noise}.{c}"))).collect();
         let std_error = error.map(|e| (0..width * height).map(|i| [e[0][i], e[1][i], e[2][i]]).collect());
-        Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id, std_error })
+        let emission: Option<Vec<Vec<f32>>> =
+            ["R", "G", "B"].iter().map(|c| take(&format!("emission.{c}"))).collect();
+        let emitter = emission.map(|e| (0..width * height).map(|i| e.iter().any(|c| c[i] > 0.0)).collect());
+        Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id, std_error, emitter })
     }
 
     /// NaN and infinite pixels (any channel), and the first one's (x, y).
@@ -168,14 +182,24 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
             *m |= s;
         }
     }
+    let mut emitter_pixels = 0;
+    for i in 0..n {
+        if [&a.emitter, &b.emitter].into_iter().flatten().any(|e| e[i]) {
+            emitter_pixels += !masked[i] as usize;
+            masked[i] = true;
+        }
+    }
     let unmasked = masked.iter().filter(|&&m| !m).count();
     let mean = b.rgb.iter().zip(&masked).filter(|(_, m)| !**m).map(|(p, _)| luminance(p)).sum::<f64>()
         / unmasked.max(1) as f64;
     let threshold = LIT_FRACTION * mean;
     let (mut rel2, mut rel_abs, mut sum_a, mut sum_b, mut err2, mut ref2, mut lit) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
-    let mut noise2 = 0.0;
+    let (mut noise2, mut leaked_pixels) = (0.0, 0);
     for i in (0..n).filter(|&i| !masked[i]) {
         let (ya, yb) = (luminance(&a.rgb[i]), luminance(&b.rgb[i]));
+        if yb == 0.0 && ya > threshold {
+            leaked_pixels += 1;
+        }
         if yb <= threshold || yb <= 0.0 {
             continue;
         }
@@ -206,6 +230,8 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
     Ok(Agreement {
         own_error: reference_noise.map(|noise| (rel2 / lit as f64 - noise * noise).max(0.0).sqrt()),
         reference_noise,
+        emitter_pixels,
+        leaked_pixels,
         relative_rmse: (rel2 / lit as f64).sqrt(),
         mean_abs_relative_error: rel_abs / lit as f64,
         relative_bias: (sum_a - sum_b) / sum_b,
@@ -228,9 +254,13 @@ impl Agreement {
     /// The figures as a person reads them, one line each; the headline first.
     pub fn summary(&self) -> Vec<String> {
         let masked = if self.surface_ids {
-            format!("{} silhouette pixel(s) masked (surface_id)", self.masked_pixels)
+            format!("{} silhouette pixel(s) masked (surface_id)", self.masked_pixels - self.emitter_pixels)
         } else {
             "no surface_id channel, so no silhouette masked".to_owned()
+        };
+        let emitters = match self.emitter_pixels {
+            0 => String::new(),
+            n => format!(", {n} emitter pixel(s) left out"),
         };
         let mut lines = vec![format!(
             "relative RMSE {:.4} (per pixel, luminance, over {} lit pixels of {})",
@@ -247,9 +277,11 @@ impl Agreement {
                 self.mean_abs_relative_error, self.relative_bias, self.l2_ratio
             ),
             format!(
-                "lit: reference luminance > {:.4e} ({} % of its mean); {masked}; no NaN or infinite pixel in either image",
+                "lit: reference luminance > {:.4e} ({} % of its mean); {masked}{emitters}; {} pixel(s) lit where the \
+                 reference is black; no NaN or infinite pixel in either image",
                 self.lit_threshold,
-                LIT_FRACTION * 100.0
+                LIT_FRACTION * 100.0,
+                self.leaked_pixels
             ),
         ]);
         lines
@@ -285,11 +317,9 @@ mod tests {
 
     fn picture(name: &str, width: usize, rgb: Vec<[f32; 3]>, ids: Option<Vec<f32>>) -> Picture {
         let height = rgb.len() / width;
-        Picture { name: name.into(), width, height, rgb, surface_id: ids, std_error: None }
+        Picture { name: name.into(), width, height, rgb, surface_id: ids, std_error: None, emitter: None }
     }
 
-    /// A bright emitter and a dim wall: 10 % error on the wall, none on the emitter. The per-pixel headline
-    /// sees the wall's error on half the pixels; the old L2 ratio hardly sees it.
     /// A reference that knows its noise: the image's own error is what the noise does not explain.
     #[test]
     fn the_reference_noise_is_taken_out_in_quadrature() {
@@ -308,6 +338,8 @@ mod tests {
         assert_eq!(agreement(&image, &reference).unwrap().own_error, Some(0.0), "noise explains all of it");
     }
 
+    /// A bright emitter and a dim wall: 10 % error on the wall, none on the emitter. The per-pixel headline
+    /// sees the wall's error on half the pixels; the old L2 ratio hardly sees it.
     #[test]
     fn the_headline_weighs_every_lit_pixel_alike() {
         let mut b = vec![[100.0f32; 3]; 4];
@@ -331,6 +363,27 @@ mod tests {
         let r = agreement(&picture("a", 2, a, None), &picture("b", 2, b, None)).unwrap();
         assert_eq!(r.lit_pixels, 2);
         assert!((r.lit_threshold - 0.005).abs() < 1e-5 && r.relative_rmse < 1e-6, "{r:?}");
+    }
+
+    /// An emitter pixel (known from either image's `emission` layer) is left out however wrong it is, and a
+    /// pixel lit where the reference is black is counted as a leak, though no lit-pixel figure can see it.
+    #[test]
+    fn emitters_are_left_out_and_leaks_counted() {
+        let b = vec![[50.0f32; 3], [1.0; 3], [1.0; 3], [0.0; 3]];
+        let a = vec![[20.0f32; 3], [1.0; 3], [1.0; 3], [0.5; 3]];
+        let plain = agreement(&picture("a", 2, a.clone(), None), &picture("b", 2, b.clone(), None)).unwrap();
+        assert_eq!((plain.emitter_pixels, plain.leaked_pixels, plain.lit_pixels), (0, 1, 3));
+        assert!(plain.relative_rmse > 0.3, "the emitter's 60 % error counts: {plain:?}");
+        let emitter = Some(vec![true, false, false, false]);
+        let mut reference = picture("b", 2, b, None);
+        reference.emitter = emitter.clone();
+        let r = agreement(&picture("a", 2, a.clone(), None), &reference).unwrap();
+        assert_eq!((r.emitter_pixels, r.masked_pixels, r.lit_pixels, r.leaked_pixels), (1, 1, 2, 1));
+        assert!(r.relative_rmse < 1e-9, "{r:?}");
+        reference.emitter = None;
+        let mut image = picture("a", 2, a, None);
+        image.emitter = emitter;
+        assert_eq!(agreement(&image, &reference).unwrap().emitter_pixels, 1, "either image's layer counts");
     }
 
     #[test]
