@@ -1,9 +1,7 @@
 #version 460
-// Atlas strategy: every sensor layer is a tile of one large 2D image. One instance per view; the view's
-// clip-space position is squeezed into its tile, and four clip distances (the view frustum's sides) keep
-// triangles inside the tile, so no viewport array and no layers are needed:
-//
-//   atlas NDC x = (x_view_ndc + 1 + 2 * tile_x) / columns - 1      (likewise y with rows)
+// Atlas strategy: every sensor layer is a tile of one large 2D image. One draw per view, its viewport and
+// scissor set to the view's tile by the host, so each view is rasterized exactly as into a layer of its
+// own (the same clip space, the same window coordinates up to the tile's integer offset):
 //
 //   +----+----+----+----+
 //   | t0 | t1 | t2 | t3 |   tile t = sensor * layers + layer, row-major, rd x rd texels each
@@ -13,23 +11,13 @@
 
 out gl_PerVertex {
     vec4 gl_Position;
-    float gl_ClipDistance[8];
+    float gl_ClipDistance[4];
 };
 
 void main() {
+    // firstInstance of the draw is the view drawn.
     GpuSensorView view = views[gl_InstanceIndex];
-    float planes[4];
-    vec4 clip = sensor_vertex(view, planes);
-    for (int k = 0; k < 4; k++) {
-        gl_ClipDistance[4 + k] = planes[k];
-    }
-    gl_ClipDistance[0] = clip.w - clip.x;
-    gl_ClipDistance[1] = clip.w + clip.x;
-    gl_ClipDistance[2] = clip.w - clip.y;
-    gl_ClipDistance[3] = clip.w + clip.y;
-    uint tile = view.layer;
-    vec2 grid = vec2(push.atlas_columns, push.atlas_rows);
-    vec2 cell = vec2(tile % push.atlas_columns, tile / push.atlas_columns);
-    vec2 xy = (clip.xy + clip.w * (1.0 + 2.0 * cell)) / grid - clip.w;
-    gl_Position = vec4(xy, clip.zw);
+    float clip[4];
+    gl_Position = sensor_vertex(view, clip);
+    gl_ClipDistance = clip;
 }

@@ -74,10 +74,7 @@ struct SensorPush {
     float epsilon;       // non-emitters return Kd * epsilon (paper eq. 2)
     uint first_view;     // first entry of the view buffer for this draw (multiview)
     uint layer_base;     // subtracted from a view's layer (layered strategies)
-    uint atlas_columns;  // tiles per row of the atlas (atlas strategy)
-    uint atlas_rows;
     uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
-    uint _pad[2];
 };
 
 struct ReducePush {

@@ -144,13 +144,9 @@ pub struct SensorPush {
     pub first_view: u32,
     /// Subtracted from a view's layer: the first layer of the framebuffer (layered strategies).
     pub layer_base: u32,
-    /// Tiles per row and rows of the atlas strategy (0 otherwise).
-    pub atlas_columns: u32,
-    pub atlas_rows: u32,
     /// 1: the exact estimator (emitter fronts leave 0 and their group in the map; their light is computed
     /// exactly); 0: the paper's (emitter fronts leave `Ke`).
     pub exact: u32,
-    pub _pad: [u32; 2],
 }
 
 /// Push constants of the reduction: the map geometry (workgroup i reduces sensor i of the batch).

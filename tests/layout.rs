@@ -83,11 +83,7 @@ fn shared_structs_match_glsl() {
         (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
         (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, layer, flags, _pad)),
-        (
-            3,
-            "SensorPush",
-            rust_layout!(SensorPush: epsilon, first_view, layer_base, atlas_columns, atlas_rows, exact, _pad),
-        ),
+        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, exact)),
         (4, "ReducePush", rust_layout!(ReducePush: rd, layers, main_layers, atlas_columns, groups, chunks, _pad)),
         (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
         (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),

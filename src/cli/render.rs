@@ -137,7 +137,8 @@ fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -
             w if w == radiance_state::INTERPOLATED => 0.5,
             _ => 0.0,
         });
-        exr = super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
+        exr =
+            super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();

@@ -55,8 +55,8 @@ pub fn self_check(prober: &mut dyn Prober, strategy: StrategyKind) -> Result<Che
 }
 
 /// The strategy to use for `sensor` sensors of size `rd` read by `estimator`, with `budget` bytes per batch:
-/// the requested one if it passes its self-check, else (auto) the fastest strategy that passes, measured on
-/// the probe at `rd`. The prober renders with the same sensor and estimator.
+/// the requested one if it passes its self-check, else (auto) the fastest strategy whose R is per-sensor's
+/// bit for bit (it rasterizes as per-sensor does, and is identical on the probe), measured at `rd`. The prober renders with the same sensor and estimator.
 #[allow(clippy::too_many_arguments)]
 pub fn choose(
     prober: &mut dyn Prober,
@@ -93,7 +93,9 @@ pub fn choose(
     for strategy in StrategyKind::ALL {
         if let Some(why) = prober.unsupported(strategy, rd) {
             events(Event::Unsupported { strategy, why });
-        } else if checked(prober, (sensor, estimator), strategy, cache, events)?.passed {
+        } else if checked(prober, (sensor, estimator), strategy, cache, events)?.identical
+            && strategy.rasterizes_like_per_sensor()
+        {
             candidates.push(strategy);
         }
     }
@@ -231,5 +233,31 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(err.contains("cannot run") && err.contains("no multiview"), "{err}");
+    }
+
+    /// A strategy whose R differs from per-sensor's only in the last bits on the probe (layered here), or
+    /// that rasterizes at offsets (the atlas), passes its check and runs when named, but `auto` does not take
+    /// it, however fast: the image must not depend on a timing.
+    #[test]
+    fn auto_takes_only_strategies_identical_to_per_sensor() {
+        let mut fake = Fake {
+            error: |k| if k == StrategyKind::Layered { 1e-6 } else { 0.0 },
+            time: |k| match k {
+                StrategyKind::Layered => 1,
+                StrategyKind::Atlas => 2,
+                _ => 10,
+            },
+            probes: Vec::new(),
+        };
+        let (sensor, exact) = (SensorKind::Hemicube, EstimatorKind::Exact);
+        let mut cache = Cache::in_memory();
+        let auto =
+            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
+        assert!(![StrategyKind::Layered, StrategyKind::Atlas].contains(&auto.strategy), "{auto:?}");
+        for kind in [StrategyKind::Layered, StrategyKind::Atlas] {
+            let named =
+                choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Fixed(kind), &mut cache, &mut |_| ());
+            assert_eq!(named.unwrap().strategy, kind);
+        }
     }
 }

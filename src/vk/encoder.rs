@@ -74,13 +74,13 @@ impl<'a> Encoder<'a> {
     /// Resets `queries` (before any timestamp of this submission is written).
     pub fn reset_queries(&self, queries: &TimestampQueries) {
         // SAFETY: recording state, outside a render pass.
-        unsafe { self.device.raw.cmd_reset_query_pool(self.raw, queries.raw, 0, queries.count) };
+        unsafe { self.device.raw.cmd_reset_query_pool(self.raw, queries.raw, 0, queries.count * queries.stride) };
     }
 
     /// Writes timestamp `index` of `queries` once all earlier commands have finished `stage`.
     pub fn timestamp(&self, queries: &TimestampQueries, index: u32, stage: vk::PipelineStageFlags) {
         // SAFETY: recording state; the query was reset earlier in this command buffer.
-        unsafe { self.device.raw.cmd_write_timestamp(self.raw, stage, queries.raw, index) };
+        unsafe { self.device.raw.cmd_write_timestamp(self.raw, stage, queries.raw, index * queries.stride) };
     }
 
     /// Begins `pass` on `framebuffer`, clearing `clears` over `area` (the top-left corner of the
@@ -148,6 +148,23 @@ impl<'a> RenderPassScope<'_, 'a> {
     pub fn bind_vertices(&self, buffer: &Buffer) {
         // SAFETY: recording state; the buffer outlives the submission.
         unsafe { self.encoder.device.raw.cmd_bind_vertex_buffers(self.encoder.raw, 0, &[buffer.raw], &[0]) };
+    }
+
+    /// Points viewport and scissor at `rect` of the framebuffer (a tile of an atlas, say).
+    pub fn set_viewport_scissor(&self, rect: vk::Rect2D) {
+        let viewport = vk::Viewport {
+            x: rect.offset.x as f32,
+            y: rect.offset.y as f32,
+            width: rect.extent.width as f32,
+            height: rect.extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: recording state inside a render pass; both states are dynamic in every pipeline here.
+        unsafe {
+            self.encoder.device.raw.cmd_set_viewport(self.encoder.raw, 0, &[viewport]);
+            self.encoder.device.raw.cmd_set_scissor(self.encoder.raw, 0, &[rect]);
+        }
     }
 
     pub fn draw(&self, vertices: u32, instances: u32, first_vertex: u32, first_instance: u32) {
