@@ -66,8 +66,8 @@ void main() {
         for (uint y = thread.y; y < rd; y += 8u) {
             uint row = weight_base + y * rd;
             for (uint x = thread.x; x < rd; x += 8u) {
-                vec3 ck = imageLoad(sensor_maps, origin + ivec3(x, y, 0)).rgb;
-                sum += ck * weights[row + x];
+                vec4 texel = imageLoad(sensor_maps, origin + ivec3(x, y, 0));
+                sum += texel.rgb * (texel.a > 0.0 ? push.emission_scale : 1.0) * weights[row + x];
             }
         }
     }

@@ -33,7 +33,7 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
         clip_distance[0] = -1.0;
     }
     out_ck_back = s.kd.rgb * push.epsilon;
-    out_ck_front = emitter ? (push.exact != 0u ? vec3(0.0) : s.ke.rgb) : out_ck_back;
+    out_ck_front = emitter ? (push.exact != 0u ? vec3(0.0) : s.ke.rgb / push.emission_scale) : out_ck_back;
     out_group = emitter ? s.ke.w : 0.0;
     return view.view_proj * p;
 }

@@ -75,6 +75,7 @@ struct SensorPush {
     uint first_view;     // first entry of the view buffer for this draw (multiview)
     uint layer_base;     // subtracted from a view's layer (layered strategies)
     uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
+    float emission_scale;  // the paper's: emitter fronts leave Ke / emission_scale (a power of two, f16 range)
 };
 
 struct ReducePush {
@@ -84,7 +85,8 @@ struct ReducePush {
     uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
     uint groups;         // light groups measured (0: the paper's estimator)
     uint chunks;         // emitter chunks of the scene: the stride of the irradiance per sensor
-    uint _pad[2];
+    float emission_scale;  // emitter-front texels (alpha > 0) are multiplied by it (the maps' Ke scale)
+    uint _pad;
 };
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).

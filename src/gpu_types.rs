@@ -147,6 +147,9 @@ pub struct SensorPush {
     /// 1: the exact estimator (emitter fronts leave 0 and their group in the map; their light is computed
     /// exactly); 0: the paper's (emitter fronts leave `Ke`).
     pub exact: u32,
+    /// The paper's estimator: emitter fronts leave `Ke / emission_scale`, a power of two that keeps them
+    /// within the half-float maps' range (`passes::sensor_maps::emission_scale`).
+    pub emission_scale: f32,
 }
 
 /// Push constants of the reduction: the map geometry (workgroup i reduces sensor i of the batch).
@@ -165,7 +168,9 @@ pub struct ReducePush {
     /// emitter pass's irradiance, per sensor).
     pub groups: u32,
     pub chunks: u32,
-    pub _pad: [u32; 2],
+    /// What texels of an emitter's front (alpha > 0) are multiplied by: the maps' `emission_scale`.
+    pub emission_scale: f32,
+    pub _pad: u32,
 }
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).

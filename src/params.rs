@@ -20,6 +20,10 @@ pub const DEFAULT_EPSILON: f32 = 0.1;
 /// little noise the filter cannot lower without blurring real gradients (docs/ACCURACY.md). The paper's
 /// estimator keeps the paper's 256² and the filter that hides its tiles.
 pub const DEFAULT_SENSOR_SIZE: EstimatorDefault<u32> = EstimatorDefault { exact: 32, paper: 256 };
+/// The widest filter: σ = 32 pixels blurs far beyond any sensor spacing, and each pixel reads (2r + 1)²
+/// neighbours. (Measured on lavapipe: from r = 181, (2r + 1)² > 2¹⁷ iterations, the driver cut the loop
+/// short and pixels were left without even their own sample: NaN.)
+pub const MAX_FILTER_RADIUS: u32 = 64;
 pub const DEFAULT_FILTER_RADIUS: EstimatorDefault<u32> = EstimatorDefault { exact: 0, paper: 2 };
 
 /// A default that depends on the estimator.
@@ -103,6 +107,14 @@ impl Param {
         }
     }
 
+    /// The parameter as the user set it: the flag, or the scene file's `[render]` key.
+    pub fn as_set(self, origin: &Origin) -> String {
+        match origin {
+            Origin::SceneFile(path) => format!("{}: [render] {}", path.display(), self.key()),
+            _ => self.flag().to_owned(),
+        }
+    }
+
     /// The key in a scene file's `[render]` table.
     pub fn key(self) -> &'static str {
         match self {
@@ -148,12 +160,8 @@ impl ParamError {
 
 impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.origin {
-            Some(Origin::SceneFile(path)) => {
-                write!(f, "{}: [render] {} {}", path.display(), self.param.key(), self.problem)
-            }
-            _ => write!(f, "{} {}", self.param.flag(), self.problem),
-        }
+        let origin = self.origin.clone().unwrap_or(Origin::Flag);
+        write!(f, "{} {}", self.param.as_set(&origin), self.problem)
     }
 }
 
@@ -218,6 +226,16 @@ impl Overrides {
             && !(d.is_finite() && d >= 0.0)
         {
             return fail(Param::Dradiance, format!("must be a finite number ≥ 0, got {d}"));
+        }
+        if let Some(r) = self.filter_radius
+            && r > MAX_FILTER_RADIUS
+        {
+            return fail(
+                Param::FilterRadius,
+                format!(
+                    "must be at most {MAX_FILTER_RADIUS} pixels (σ = radius / 2; the cost grows with radius²), got {r}"
+                ),
+            );
         }
         if let Some(x) = self.exposure
             && !x.is_finite()
@@ -344,6 +362,31 @@ impl RenderParams {
         }
     }
 
+    /// Values that are valid but probably not what was meant, each with the reason: a field of view given
+    /// to hemicube sensors (which ignore it), and an `ε` brighter than every emitter of the scene (whose
+    /// brightest `Ke` component is `brightest_emission`), which then dominates the image.
+    pub fn warnings(&self, brightest_emission: f32) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let fov = self.origin(Param::Fov);
+        if matches!(self.estimator.sensor, SensorKind::Hemicube) && fov != Origin::Default {
+            warnings.push(format!(
+                "{}: ignored by hemicube sensors, which see the whole hemisphere (a field of view is the \
+                 frustum sensor's: {} frustum)",
+                Param::Fov.as_set(&fov),
+                Param::Sensor.as_set(&fov)
+            ));
+        }
+        let epsilon = self.estimator.epsilon;
+        if brightest_emission > 0.0 && epsilon > brightest_emission {
+            warnings.push(format!(
+                "{} {epsilon} is brighter than every emitter (the brightest Ke component is {brightest_emission}): \
+                 every surface then returns Kd·ε, and the constant term dominates the image",
+                Param::Epsilon.as_set(&self.origin(Param::Epsilon))
+            ));
+        }
+        warnings
+    }
+
     /// Where `param`'s value came from.
     pub fn origin(&self, param: Param) -> Origin {
         self.origins.get(&param).cloned().unwrap_or(Origin::Default)
@@ -395,6 +438,7 @@ mod tests {
             (Overrides { sensor: Some(SensorShape::Frustum), fov_deg: Some(180.0), ..Default::default() }, Param::Fov),
             (Overrides { dradiance: Some(f32::NAN), ..Default::default() }, Param::Dradiance),
             (Overrides { sensor_size: Some(15), ..Default::default() }, Param::SensorSize),
+            (Overrides { filter_radius: Some(MAX_FILTER_RADIUS + 1), ..Default::default() }, Param::FilterRadius),
         ];
         for (values, param) in bad {
             let as_flag = RenderParams::resolve(None, &values).unwrap_err();
@@ -417,5 +461,28 @@ mod tests {
             let e = Overrides::from_scene_table(Path::new("s.toml"), &table).unwrap_err().to_string();
             assert!(e.starts_with("s.toml: [render]: "), "{e}");
         }
+    }
+
+    /// A field of view given to hemicubes, and an ε brighter than every emitter, are warned about, named as
+    /// the user set them; the defaults and a frustum's field of view are not.
+    #[test]
+    fn valid_but_doubtful_values_are_warned_about() {
+        let quiet = RenderParams::resolve(None, &Overrides::default()).unwrap();
+        assert!(quiet.warnings(17.0).is_empty(), "{:?}", quiet.warnings(17.0));
+        let frustum = Overrides { sensor: Some(SensorShape::Frustum), fov_deg: Some(90.0), ..Default::default() };
+        assert!(RenderParams::resolve(None, &frustum).unwrap().warnings(17.0).is_empty());
+        let hemicube = Overrides { fov_deg: Some(90.0), epsilon: Some(1e9), ..Default::default() };
+        let warnings = RenderParams::resolve(None, &hemicube).unwrap().warnings(17.0);
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+        assert!(warnings[0].starts_with("--fov: ignored by hemicube sensors"), "{warnings:?}");
+        assert!(warnings[1].starts_with("--epsilon 1000000000 is brighter than every emitter"), "{warnings:?}");
+        let path = Path::new("s.toml");
+        let in_file = RenderParams::resolve(Some((path, &hemicube)), &Overrides::default()).unwrap();
+        assert!(
+            in_file.warnings(17.0)[0].starts_with("s.toml: [render] fov_deg: ignored"),
+            "{:?}",
+            in_file.warnings(17.0)
+        );
+        assert_eq!(in_file.warnings(2e9).len(), 1, "an ε below the brightest emitter is fine");
     }
 }

@@ -124,6 +124,7 @@ fn bad_mtl_lines_name_their_line() {
         ("mtl_illum", "illum two", "'illum' needs"),
         ("mtl_newmtl", "newmtl", "'newmtl' needs a material name"),
         ("mtl_map", "map_Kd", "'map_Kd' needs a file name"),
+        ("mtl_ke_huge", "Ke 1e30 1e30 1e30", "'Ke' 1000000000000000000000000000000 exceeds 1e18"),
     ] {
         let mtl = format!("# materials\nnewmtl a\n{bad}\nKd 0.5 0.5 0.5\n");
         rejects_with(name, Some(&obj), None, &[("m.mtl", &mtl)], &["m.mtl:3", expected]);

@@ -106,3 +106,30 @@ fn gpu_time_comes_from_timestamps_where_the_device_has_them() {
         );
     });
 }
+
+/// Emission beyond the half-float maps' 65504 renders right with the paper's estimator (which writes `Ke`
+/// into the maps): in a furnace of `Ke` every hemicube sees `R = Ke`, for any finite `Ke`, in the colour
+/// given (before, `Ke` 1e5 rendered at 0.66 of its brightness, and its colour shifted).
+#[test]
+fn emission_beyond_half_float_range_renders_right() {
+    use sensorlight::params::EstimatorKind;
+    use sensorlight::renderer::{Quiet, Renderer};
+    use sensorlight::strategy::StrategyKind;
+    for ke in [1e5f32, 3e9, 1e18] {
+        let mut scene = common::furnace(ke);
+        scene.mesh.materials[0].ke = Vec3::new(ke, 0.5 * ke, 0.25 * ke);
+        let setup = common::every_pixel(SensorKind::Hemicube, 16, 0.25);
+        let out = common::gpu(|device| {
+            let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
+                .estimator(EstimatorKind::Paper)
+                .build_unchecked(StrategyKind::default())
+                .unwrap();
+            renderer.render(scene.image, &setup.frame, &Quiet).unwrap()
+        });
+        let expected = Vec3::new(ke, 0.5 * ke, 0.25 * ke);
+        for r in out.radiance.iter().filter(|r| r.w == SENSED) {
+            let error = ((r.truncate() - expected) / expected).abs().max_element();
+            assert!(error < 2e-3, "Ke {ke}: R {r}, expected {expected} (relative error {error:.1e})");
+        }
+    }
+}

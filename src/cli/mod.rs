@@ -68,6 +68,9 @@ fn load_scene(path: &Path, flags: &Overrides) -> Result<(Scene, RenderParams)> {
     }
     let from_file = Overrides::from_scene_table(path, &scene.render)?;
     let params = RenderParams::resolve(Some((path, &from_file)), flags)?;
+    for warning in params.warnings(scene.mesh.brightest_emission()) {
+        eprintln!("warning: {warning}");
+    }
     Ok((scene, params))
 }
 

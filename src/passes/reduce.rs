@@ -24,6 +24,8 @@ pub struct ReducePass {
     /// The scene's light groups (their ranges of emitter chunks), and how many chunks it has.
     groups: Arc<Buffer>,
     chunks: u32,
+    /// The maps' `Ke` scale (`sensor_maps::emission_scale`), multiplied back on emitter texels.
+    emission_scale: f32,
     rd: u32,
     layout: SensorLayout,
 }
@@ -56,7 +58,16 @@ impl ReducePass {
             ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
         let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
         let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        Ok(Self { kernel, weights, groups: scene.groups.clone(), chunks: scene.chunk_count, rd, layout })
+        let emission_scale = super::sensor_maps::emission_scale(scene, &layout);
+        Ok(Self {
+            kernel,
+            weights,
+            groups: scene.groups.clone(),
+            chunks: scene.chunk_count,
+            emission_scale,
+            rd,
+            layout,
+        })
     }
 
     /// Binds slot `slot`'s resources (call while that slot's work is not in flight).
@@ -88,7 +99,8 @@ impl ReducePass {
             atlas_columns,
             groups: self.layout.groups,
             chunks: self.chunks,
-            _pad: [0; 2],
+            emission_scale: self.emission_scale,
+            _pad: 0,
         };
         self.kernel.dispatch(enc, slot, &push, [count, 1, 1]);
     }

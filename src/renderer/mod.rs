@@ -14,7 +14,7 @@ mod stats;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use ash::vk;
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
@@ -219,6 +219,22 @@ pub fn unsupported(
     let layout = config.layout(&Lights::new(&scene.mesh));
     let desc = StrategyDesc { layout, rd, budget: config.batch_budget(device, &layout) };
     crate::passes::sensor_maps::unsupported(kind, device, &desc)
+}
+
+/// Never an image of NaN with success: whatever produced one (a driver, a bug) is an error, before anything
+/// is written.
+fn check_finite(image: &[Vec4], width: usize, driver: &str) -> Result<()> {
+    let non_finite = |v: &&Vec4| !v.truncate().is_finite();
+    if let Some(first) = image.iter().position(|v| non_finite(&v)) {
+        bail!(
+            "the image has {} NaN or infinite pixel(s), the first at x {}, y {}: this is a bug in sensorlight or the \
+             Vulkan driver ({driver}); nothing was written",
+            image.iter().filter(non_finite).count(),
+            first % width,
+            first / width
+        );
+    }
+    Ok(())
 }
 
 /// The sensor size against the device's largest image and framebuffer side.
@@ -463,6 +479,7 @@ impl Renderer {
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
         let radiance = transfer::read_buffer::<Vec4>(&device, &targets.filtered, pixels)?;
         let post_time = post_start.elapsed();
+        check_finite(&image, size.width as usize, &device.adapter.driver)?;
 
         let batches = self.runner.times;
         let stats = RenderStats::new(
@@ -487,4 +504,23 @@ fn map_buffer(device: &Arc<Device>, name: &str, size: ImageSize) -> Result<Buffe
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
     Buffer::new(device, name, size.width as u64 * size.height as u64 * 16, usage, MemoryLocation::GpuOnly)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_with_nan_or_inf_is_an_error_naming_the_first() {
+        let mut image = vec![Vec4::ONE; 6];
+        assert!(check_finite(&image, 3, "d").is_ok());
+        image[4].y = f32::NAN;
+        image[5].x = f32::INFINITY;
+        let message = check_finite(&image, 3, "d").unwrap_err().to_string();
+        assert!(message.contains("2 NaN or infinite pixel(s), the first at x 1, y 1"), "{message}");
+        image[4].w = 0.0;
+        image[4].y = 0.0;
+        image[5] = Vec4::new(1.0, 1.0, 1.0, f32::NAN);
+        assert!(check_finite(&image, 3, "d").is_ok(), "alpha is not part of the image");
+    }
 }

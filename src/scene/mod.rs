@@ -140,6 +140,11 @@ impl Mesh {
         warnings
     }
 
+    /// The largest `Ke` component of the materials in use (0 without emitters).
+    pub fn brightest_emission(&self) -> f32 {
+        self.surfaces.iter().map(|s| self.materials[s.material].ke.max_element()).fold(0.0, f32::max)
+    }
+
     pub fn material_of(&self, surface: SurfaceId) -> &Material {
         &self.materials[self.surfaces[surface as usize - 1].material]
     }

@@ -35,6 +35,10 @@ pub struct Material {
     pub ke: Vec3,
 }
 
+/// The largest `Kd`/`Ke` component accepted: its square must stay finite in `f32` (the reference's variance),
+/// with room for sums over many samples.
+pub const MAX_COLOUR: f32 = 1e18;
+
 impl Material {
     pub const DEFAULT_KD: f32 = 0.8;
 
@@ -400,6 +404,12 @@ fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
                     parse_numbers(args).map_err(|bad| err(format!("'{keyword}' value '{bad}' is not a number")))?;
                 if values.len() != 3 || values.iter().any(|v| !v.is_finite() || *v < 0.0) {
                     return Err(err(format!("'{keyword}' needs 3 finite non-negative numbers")));
+                }
+                if let Some(big) = values.iter().find(|&&v| v > MAX_COLOUR) {
+                    return Err(err(format!(
+                        "'{keyword}' {big} exceeds {MAX_COLOUR:e}: sums of light this bright (and the reference's \
+                         variance, which squares it) overflow single-precision floats; scale the scene's units"
+                    )));
                 }
             }
             "Ns" | "Ni" | "d" if args.first().and_then(|a| a.parse::<f32>().ok()).is_none_or(|v| !v.is_finite()) => {

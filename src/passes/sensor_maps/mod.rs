@@ -43,6 +43,21 @@ use crate::vk::{
 pub const MAP_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Bytes per sensor-map texel: colour and depth.
 pub const TEXEL_BYTES: u64 = 8 + 4;
+/// The largest finite half float.
+const MAP_MAX: f32 = 65504.0;
+
+/// What the paper's estimator divides `Ke` by in the maps (and the reduction multiplies back, on texels
+/// whose alpha marks an emitter's front): the smallest power of two that keeps the brightest emitter within
+/// [`MAP_FORMAT`]'s range. A power of two changes only the exponent, so nothing is lost (1 for every
+/// emitter up to 65504, so those maps are as before); the exact estimator writes no `Ke` into the maps.
+pub fn emission_scale(scene: &GpuScene, layout: &SensorLayout) -> f32 {
+    let brightest = scene.lights.emitters.iter().map(|e| e.ke.max_element()).fold(0.0, f32::max);
+    let mut scale = 1.0f32;
+    while layout.groups == 0 && brightest / scale > MAP_MAX {
+        scale *= 2.0;
+    }
+    scale
+}
 
 /// Where a batch's maps lie in their image, for the reduction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -261,6 +276,8 @@ struct SensorPipeline {
     surfaces: Arc<Buffer>,
     /// The exact estimator: emitter fronts leave 0 and their group.
     exact: bool,
+    /// The paper's estimator: maps hold `Ke` divided by this ([`emission_scale`]).
+    emission_scale: f32,
     device: Arc<Device>,
 }
 
@@ -297,6 +314,7 @@ impl SensorPipeline {
             vertex_count: scene.vertex_count,
             surfaces: scene.surfaces.clone(),
             exact: desc.exact(),
+            emission_scale: emission_scale(scene, &desc.layout),
             device: device.clone(),
         })
     }
@@ -319,7 +337,8 @@ impl SensorPipeline {
 
     /// Draws the scene `instances` times starting at view `first_instance`.
     fn draw(&self, pass: &RenderPassScope<'_, '_>, push: &SensorPush, instances: u32, first_instance: u32) {
-        pass.push(&self.layout, &SensorPush { exact: self.exact as u32, ..*push });
+        let push = SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push };
+        pass.push(&self.layout, &push);
         pass.draw(self.vertex_count, instances, 0, first_instance);
     }
 }
