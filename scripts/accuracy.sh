@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# The accuracy tables of docs/ACCURACY.md: sensorlight against its CPU oracle (`sensorlight reference`, light
+# sampling + MIS, ε = 0 or as stated), per-pixel relative RMSE of R over lit pixels, silhouettes and emitters
+# masked, the oracle's own noise taken out ("own error"). The peer table compares images (Le + Kd·R). References are made once into OUT and reused.
+#
+#   scripts/accuracy.sh OUT [every|curve|ajar]...      (default: all three tables)
+#
+# every: every pixel sensed, rd 64, no filter, ε 0 — the paper's estimator against the exact one.
+# curve: the shipped Cornell box at 256², ε 0.1, defaults but for rd (and dradiance): error against time.
+# ajar:  the door-ajar scene, defaults against every pixel sensed.
+# peer:  against Mitsuba 3's direct light (scripts/peer/mitsuba_direct.py, pixel centres, ε 0) at each
+#        scene's own size: PEER=DIR holding <scene>-ref.exr (made as docs/ACCURACY.md says).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${SENSORLIGHT:-target/release/sensorlight}
+out=${1:?usage: $0 OUT [every|curve|ajar]...}
+shift
+tables=("${@:-every curve ajar}")
+peer=${PEER:-}
+mkdir -p "$out"
+export SENSORLIGHT_CACHE_DIR="$out/cache"
+
+ref() { # NAME SCENE WIDTH HEIGHT SENSOR SAMPLES EPSILON
+    [ -f "$out/$1-ref.exr" ] || "$bin" reference "scenes/$2" -o "$out/$1-ref.exr" --width "$3" --height "$4" \
+        --sensor "$5" --samples "$6" --epsilon "$7" --no-png >&2
+}
+
+row() { # LABEL REFERENCE SCENE RENDER-FLAGS...
+    local label=$1 reference=$2 scene=$3
+    shift 3
+    "$bin" render "scenes/$scene" -o "$out/$label.exr" --aovs --no-png --stats-json "$out/$label.json" "$@" \
+        2>"$out/$label.log" >&2
+    "$bin" compare "$out/$label.exr" "$reference" --layer "${layer-radiance}" --json "$out/$label.cmp.json" >/dev/null 2>&1
+    python3 - "$label" "$out/$label.json" "$out/$label.cmp.json" "$*" <<'PY'
+import json, sys
+label, stats, cmp, flags = sys.argv[1], json.load(open(sys.argv[2])), json.load(open(sys.argv[3])), sys.argv[4]
+own = cmp["own_error"] if cmp["own_error"] is not None else cmp["relative_rmse"]
+print(f"| {label} | `{flags}` | {stats['sensors']} | {stats['total_seconds']:.2f} | {100 * own:.2f} % | "
+      f"{100 * cmp['relative_rmse']:.2f} % | {100 * (cmp['reference_noise'] or 0):.2f} % | {cmp['leaked_pixels']} |")
+PY
+}
+
+header() {
+    echo
+    echo "| case | flags | sensors | seconds | own error | relative RMSE | oracle noise | leaked px |"
+    echo "|---|---|---|---|---|---|---|---|"
+}
+
+for table in ${tables[*]}; do
+    case "$table" in
+    every)
+        echo "### Every pixel sensed, rd 64, no filter, ε 0"
+        header
+        every=(--tile 1 --dradiance 0 --filter-radius 0 --epsilon 0 --sensor-size 64)
+        for c in "cornell cornell/cornell.toml 96 96 hemicube" "cornell-frustum cornell/cornell.toml 96 96 frustum" \
+            "small-light small-light/small-light.toml 160 120 hemicube" "room room/room.toml 128 96 hemicube"; do
+            read -r name scene w h sensor <<<"$c"
+            ref "$name" "$scene" "$w" "$h" "$sensor" 16384 0
+            for estimator in paper exact; do
+                row "$name-$estimator" "$out/$name-ref.exr" "$scene" --estimator "$estimator" --sensor "$sensor" \
+                    --width "$w" --height "$h" "${every[@]}"
+            done
+        done
+        ;;
+    curve)
+        echo "### Error against time: the shipped Cornell box, 256², ε 0.1"
+        header
+        ref cornell256 cornell/cornell.toml 256 256 hemicube 4096 0.1
+        r="$out/cornell256-ref.exr"
+        for rd in 64 128 256; do row "paper-rd$rd" "$r" cornell/cornell.toml --estimator paper --sensor-size "$rd"; done
+        for rd in 16 32 64; do row "exact-rd$rd" "$r" cornell/cornell.toml --estimator exact --sensor-size "$rd"; done
+        row "exact-rd32-d0.1" "$r" cornell/cornell.toml --estimator exact --sensor-size 32 --dradiance 0.1
+        row "exact-rd64-d0.1" "$r" cornell/cornell.toml --estimator exact --sensor-size 64 --dradiance 0.1
+        ;;
+    ajar)
+        echo "### Door ajar (160 × 120, ε 0): defaults against every pixel sensed"
+        header
+        ref door-ajar door-ajar/door-ajar.toml 160 120 hemicube 16384 0
+        size=(--width 160 --height 120 --epsilon 0)
+        row ajar-every "$out/door-ajar-ref.exr" door-ajar/door-ajar.toml "${size[@]}" --tile 1 --dradiance 0 --filter-radius 0
+        row ajar-defaults "$out/door-ajar-ref.exr" door-ajar/door-ajar.toml "${size[@]}"
+        cp "$out/ajar-every.exr" "$out/ajar-every-copy.exr" # compare refuses an output that is also an input
+        row ajar-defaults-vs-every "$out/ajar-every-copy.exr" door-ajar/door-ajar.toml "${size[@]}"
+        ;;
+    peer)
+        echo "### Against Mitsuba 3 (direct light, ε 0, each scene's own size)"
+        header
+        layer="" # Mitsuba writes the image (Le + albedo·R), not R
+        for scene in cornell small-light door-ajar room; do
+            reference="${peer:?set PEER to the directory of the Mitsuba references}/$scene-ref.exr"
+            row "$scene-mitsuba-defaults" "$reference" "$scene/$scene.toml" --epsilon 0
+            row "$scene-mitsuba-every-rd64" "$reference" "$scene/$scene.toml" --epsilon 0 --tile 1 --dradiance 0 \
+                --filter-radius 0 --sensor-size 64
+        done
+        ;;
+    *) echo "unknown table '$table'" >&2; exit 2 ;;
+    esac
+done
