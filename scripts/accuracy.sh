@@ -35,8 +35,9 @@ row() { # LABEL REFERENCE SCENE RENDER-FLAGS...
 import json, sys
 label, stats, cmp, flags = sys.argv[1], json.load(open(sys.argv[2])), json.load(open(sys.argv[3])), sys.argv[4]
 own = cmp["own_error"] if cmp["own_error"] is not None else cmp["relative_rmse"]
+noise = "—" if cmp["reference_noise"] is None else f"{100 * cmp['reference_noise']:.2f} %"
 print(f"| {label} | `{flags}` | {stats['sensors']} | {stats['total_seconds']:.2f} | {100 * own:.2f} % | "
-      f"{100 * cmp['relative_rmse']:.2f} % | {100 * (cmp['reference_noise'] or 0):.2f} % | {cmp['leaked_pixels']} |")
+      f"{100 * cmp['relative_rmse']:.2f} % | {noise} | {cmp['leaked_pixels']} |")
 PY
 }
 
