@@ -16,6 +16,7 @@ const RULES: &[(&str, &[&str])] = &[
     // CPU algorithms.
     ("light", &["scene"]),
     ("gbuffer", &["scene"]),
+    ("clusters", &["scene"]),
     ("sensors", &["scene", "gbuffer", "gpu_types", "light"]),
     ("params", &["sensors"]),
     // The oracle: CPU only, never a GPU pass.
