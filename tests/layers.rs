@@ -25,7 +25,10 @@ const RULES: &[(&str, &[&str])] = &[
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.
     ("gpu_scene", &["vk", "scene", "gpu_types", "light"]),
-    ("passes", &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light"]),
+    (
+        "passes",
+        &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light", "clusters"],
+    ),
     (
         "renderer",
         &[
