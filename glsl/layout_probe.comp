@@ -19,6 +19,9 @@ layout(std430, set = 0, binding = 10) buffer Groups { GpuLightGroup groups[]; };
 layout(std430, set = 0, binding = 11) buffer Results { GpuSensorResult results[]; };
 layout(std430, set = 0, binding = 12) buffer Chunks { GpuEmitterChunk chunks[]; };
 layout(std430, set = 0, binding = 13) buffer EmitterPushes { EmitterPush emitter_pushes[]; };
+layout(std430, set = 0, binding = 14) buffer Clusters { GpuCluster clusters[]; };
+layout(std430, set = 0, binding = 15) buffer Commands { GpuDrawCommand commands[]; };
+layout(std430, set = 0, binding = 16) buffer CullPushes { CullPush cull_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -36,4 +39,7 @@ void main() {
     results[1] = results[0];
     chunks[1] = chunks[0];
     emitter_pushes[1] = emitter_pushes[0];
+    clusters[1] = clusters[0];
+    commands[1] = commands[0];
+    cull_pushes[1] = cull_pushes[0];
 }

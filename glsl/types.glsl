@@ -114,4 +114,37 @@ const float STATE_INTERPOLATED = 2.0;
 
 const float PI = 3.14159265358979323846;
 
+// One cluster of the LOD hierarchy (clusters::Cluster flattened).
+struct GpuCluster {
+    vec4 sphere;  // bounding sphere of its triangles
+    vec4 own;     // its own error bound's sphere (error in errors.x; 0: full detail)
+    vec4 parent;  // its parent's (error in errors.y; FLT_MAX: terminal)
+    vec4 errors;
+    uint first_index;
+    uint index_count;
+    uint flags;  // CLUSTER_EMITTER
+    uint _pad;
+};
+
+const uint CLUSTER_EMITTER = 1u;
+
+// VkDrawIndexedIndirectCommand.
+struct GpuDrawCommand {
+    uint index_count;
+    uint instance_count;
+    uint first_index;
+    int vertex_offset;
+    uint first_instance;  // the view drawn
+};
+
+struct CullPush {
+    uint clusters;
+    uint views;
+    uint per_sensor;
+    uint max_per_view;
+    uint rd;
+    float near;
+    uint _pad[2];
+};
+
 #endif

@@ -234,3 +234,53 @@ pub const VERTEX_ATTRIBUTES: [(u32, ash::vk::Format, u32); 2] = [
 pub const VERTEX_STRIDE: u32 = size_of::<Vertex>() as u32;
 
 const _: () = assert!(size_of::<Vertex>() == 16);
+
+/// One cluster of the LOD hierarchy as the culling pass reads it (`crate::clusters::Cluster`, flattened).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCluster {
+    /// Bounding sphere of its triangles: centre, radius.
+    pub sphere: Vec4,
+    /// Its own error bound (centre, radius) and its parent's; the errors themselves in `errors`.
+    pub own: Vec4,
+    pub parent: Vec4,
+    /// x: own error (0: full detail), y: parent error (`f32::MAX`: terminal); zw unused.
+    pub errors: Vec4,
+    pub first_index: u32,
+    pub index_count: u32,
+    /// [`CLUSTER_EMITTER`] or 0.
+    pub flags: u32,
+    pub _pad: u32,
+}
+
+/// A cluster of an emitter: the only ones an emitters-only view keeps.
+pub const CLUSTER_EMITTER: u32 = 1;
+
+/// `VkDrawIndexedIndirectCommand`, as the culling pass writes it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuDrawCommand {
+    pub index_count: u32,
+    pub instance_count: u32,
+    pub first_index: u32,
+    pub vertex_offset: i32,
+    /// The view drawn (the sensor vertex shaders read `views[gl_InstanceIndex]`).
+    pub first_instance: u32,
+}
+
+/// Push constants of the culling pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CullPush {
+    pub clusters: u32,
+    pub views: u32,
+    /// Views per sensor: view `v` belongs to sensor `v / per_sensor`.
+    pub per_sensor: u32,
+    /// Command slots per view: view `v` writes commands `v · max_per_view ..`.
+    pub max_per_view: u32,
+    /// The sensor-map size: a view's accepted error is half its texel, `1 / (rd · scale)`.
+    pub rd: u32,
+    /// Distances below this count as this (the views' near plane).
+    pub near: f32,
+    pub _pad: [u32; 2],
+}

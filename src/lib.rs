@@ -14,6 +14,7 @@
 //! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user.
 
 pub mod bench;
+pub mod clusters;
 pub mod errors;
 pub mod gbuffer;
 pub mod gpu_scene;

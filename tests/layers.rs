@@ -16,6 +16,7 @@ const RULES: &[(&str, &[&str])] = &[
     // CPU algorithms.
     ("light", &["scene"]),
     ("gbuffer", &["scene"]),
+    ("clusters", &["scene"]),
     ("sensors", &["scene", "gbuffer", "gpu_types", "light"]),
     ("params", &["sensors"]),
     // The oracle: CPU only, never a GPU pass.
@@ -24,7 +25,10 @@ const RULES: &[(&str, &[&str])] = &[
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.
     ("gpu_scene", &["vk", "scene", "gpu_types", "light"]),
-    ("passes", &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light"]),
+    (
+        "passes",
+        &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light", "clusters"],
+    ),
     (
         "renderer",
         &[

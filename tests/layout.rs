@@ -5,8 +5,8 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    EmitterPush, GBufferPush, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult,
-    GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
+    CullPush, EmitterPush, GBufferPush, GpuCluster, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup,
+    GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -98,6 +98,17 @@ fn shared_structs_match_glsl() {
         (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility)),
         (12, "GpuEmitterChunk", rust_layout!(GpuEmitterChunk: first, count, group, _pad)),
         (13, "EmitterPush", rust_layout!(EmitterPush: sensors, chunks, groups, _pad)),
+        (
+            14,
+            "GpuCluster",
+            rust_layout!(GpuCluster: sphere, own, parent, errors, first_index, index_count, flags, _pad),
+        ),
+        (
+            15,
+            "GpuDrawCommand",
+            rust_layout!(GpuDrawCommand: index_count, instance_count, first_index, vertex_offset, first_instance),
+        ),
+        (16, "CullPush", rust_layout!(CullPush: clusters, views, per_sensor, max_per_view, rd, near, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

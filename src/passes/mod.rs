@@ -2,6 +2,7 @@
 //! descriptors and is named after the shaders it runs (`glsl/<pass>.*`).
 
 pub mod compose;
+pub mod cull;
 pub mod emitters;
 pub mod fill;
 pub mod filter;

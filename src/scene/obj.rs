@@ -99,6 +99,7 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let text = read_text(path).map_err(|e| error(path, None, format!("cannot read mesh: {e}")))?;
     let mut warnings = Vec::new();
     let checked = check_obj(path, &text, &mut warnings)?;
+    drop(text); // the checked copy is what tobj reads: one copy of a large file in memory, not two
 
     let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
     let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);

@@ -34,7 +34,7 @@ pub enum StrategyKind {
     /// One instanced draw per batch, `gl_Layer` from the vertex shader.
     #[default]
     Layered,
-    /// One instanced draw into tiles of one large 2D image.
+    /// One draw per view into its tile of one large 2D image (its viewport); used only when named.
     Atlas,
 }
 

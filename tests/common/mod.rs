@@ -1,6 +1,8 @@
 //! Shared test helpers: a validated GPU, the CLI binary, scratch directories.
 #![allow(dead_code)] // each test binary uses a different subset
 
+pub mod meshes;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::Arc;

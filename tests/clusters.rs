@@ -1,0 +1,145 @@
+//! The cluster hierarchy (docs/DESIGN.md §9), on the CPU: error bounds grow up the hierarchy, the finest
+//! level is the mesh exactly, any selection of a closed sphere is watertight, surfaces and emitters are
+//! kept, and the cache returns what was built.
+
+mod common;
+
+use std::collections::HashMap;
+
+use common::meshes::scene;
+use glam::Vec3;
+use sensorlight::clusters::{self, Cluster, ClusterMesh, cache, selected};
+use sensorlight::scene::SurfaceId;
+
+/// A triangle by its corners' bits, rotated so that the smallest corner comes first (orientation kept).
+fn key(t: [[u32; 3]; 3]) -> [[u32; 3]; 3] {
+    let first = (0..3).min_by_key(|&k| t[k]).unwrap();
+    [t[first], t[(first + 1) % 3], t[(first + 2) % 3]]
+}
+
+fn bits(p: [f32; 3]) -> [u32; 3] {
+    p.map(|x| (x + 0.0).to_bits())
+}
+
+fn triangles(c: &ClusterMesh, clusters: impl Iterator<Item = Cluster>) -> Vec<[[u32; 3]; 3]> {
+    let mut out: Vec<_> = clusters
+        .flat_map(|k| c.triangles_of(&k).map(|t| key(t.map(|v| bits(c.positions[v as usize])))).collect::<Vec<_>>())
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+#[test]
+fn error_bounds_grow_up_the_hierarchy() {
+    let c = clusters::build(&scene());
+    let mut levels = 0;
+    for k in &c.clusters {
+        levels = levels.max(k.depth);
+        assert!(k.own.error <= k.parent.error, "{k:?}");
+        if k.parent.error < f32::MAX && k.own.error > 0.0 {
+            // The parent's sphere holds its child's, so its projected error is at least as large from anywhere.
+            let gap = k.own.center().distance(k.parent.center()) + k.own.radius - k.parent.radius;
+            assert!(gap <= 1e-4 * k.parent.radius.max(1.0), "{k:?}");
+        }
+    }
+    assert!(levels >= 3, "a 16k-triangle sphere simplifies over several levels, found {levels}");
+    // From anywhere, at any threshold: the parent's projected error is never below the child's.
+    for eye in [Vec3::new(0.0, 0.0, 1.2), Vec3::new(5.0, 1.0, -3.0), Vec3::new(0.3, -1.4, 0.2)] {
+        for k in &c.clusters {
+            let (own, parent) =
+                (clusters::projected_error(&k.own, eye, 1e-3), clusters::projected_error(&k.parent, eye, 1e-3));
+            assert!(own <= parent, "{eye} {k:?}");
+        }
+    }
+}
+
+#[test]
+fn the_finest_level_is_the_mesh_each_triangle_once() {
+    let mesh = scene();
+    let c = clusters::build(&mesh);
+    let mut input: Vec<_> = mesh.triangles.iter().map(|t| key(t.v.map(|p| bits(p.to_array())))).collect();
+    input.sort_unstable();
+    let finest = triangles(&c, c.clusters.iter().copied().filter(Cluster::is_full_detail));
+    assert_eq!(finest.len(), mesh.triangles.len());
+    assert!(finest == input, "the full-detail clusters hold exactly the mesh's triangles");
+    assert!(c.clusters.iter().all(|k| k.triangles() as usize <= clusters::MAX_TRIANGLES && k.triangles() > 0));
+}
+
+#[test]
+fn surfaces_are_kept_apart_and_emitters_never_simplified() {
+    let mesh = scene();
+    let c = clusters::build(&mesh);
+    for k in &c.clusters {
+        assert!(c.triangles_of(k).flatten().all(|v| c.vertex_surface[v as usize] == k.surface), "{k:?}");
+    }
+    let surfaces: std::collections::BTreeSet<SurfaceId> = c.clusters.iter().map(|k| k.surface).collect();
+    assert_eq!(surfaces.into_iter().collect::<Vec<_>>(), [1, 2, 3]);
+    let lamp = mesh.surfaces.iter().position(|s| mesh.materials[s.material].is_emitter()).unwrap() as u32 + 1;
+    for k in c.clusters.iter().filter(|k| k.surface == lamp) {
+        assert!(k.is_full_detail() && k.parent.error == f32::MAX, "an emitter cluster is simplified: {k:?}");
+    }
+    // The others are simplified: they have coarser versions.
+    assert!(c.clusters.iter().any(|k| k.surface != lamp && !k.is_full_detail()));
+}
+
+/// Every directed edge of the selected triangles has exactly one twin the other way: no crack, no overlap.
+fn assert_watertight(c: &ClusterMesh, chosen: &[Cluster], what: &str) {
+    let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+    for k in chosen {
+        for t in c.triangles_of(k) {
+            for e in 0..3 {
+                *edges.entry((t[e], t[(e + 1) % 3])).or_default() += 1;
+            }
+        }
+    }
+    for (&(a, b), &n) in &edges {
+        assert_eq!(n, 1, "{what}: edge {a}–{b} used {n} times");
+        assert_eq!(edges.get(&(b, a)), Some(&1), "{what}: edge {a}–{b} has no twin (a crack)");
+    }
+}
+
+#[test]
+fn any_selection_of_a_closed_sphere_is_watertight_and_coarser_far_away() {
+    let c = clusters::build(&scene());
+    let ball: Vec<Cluster> = c.clusters.iter().copied().filter(|k| k.surface == 1).collect();
+    let full = ball.iter().filter(|k| k.is_full_detail()).map(|k| k.triangles()).sum::<u32>();
+    let mut coarsest = full;
+    for eye in [Vec3::new(0.0, 0.0, 1.05), Vec3::new(0.0, 2.0, 2.0), Vec3::new(8.0, 0.0, 0.0), Vec3::splat(40.0)] {
+        for tau in [1e-4, 1e-3, 1.0 / 64.0, 0.1, 1.0, 100.0] {
+            let chosen: Vec<Cluster> = ball.iter().copied().filter(|k| selected(k, eye, 1e-4, tau)).collect();
+            assert_watertight(&c, &chosen, &format!("eye {eye}, τ {tau}"));
+            coarsest = coarsest.min(chosen.iter().map(|k| k.triangles()).sum());
+        }
+    }
+    assert!(coarsest * 20 < full, "far away the sphere is coarse: {coarsest} of {full} triangles");
+    // At a threshold of 0, the full detail exactly.
+    let chosen: Vec<Cluster> = ball.iter().copied().filter(|k| selected(k, Vec3::splat(9.0), 1e-4, 0.0)).collect();
+    assert!(chosen.iter().all(Cluster::is_full_detail) && chosen.iter().map(|k| k.triangles()).sum::<u32>() == full);
+}
+
+#[test]
+fn the_cache_returns_what_was_built_and_rebuilds_what_it_cannot_trust() {
+    let mesh = scene();
+    let dir = std::env::temp_dir().join(format!("sensorlight-clusters-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (built, note) = cache::load_or_build(&mesh, Some(&dir));
+    assert!(note.is_none(), "{note:?}");
+    let file = cache::path(&dir, &mesh);
+    assert!(file.is_file());
+    let (read, _) = cache::load_or_build(&mesh, Some(&dir));
+    assert!(read == built);
+    let bytes = std::fs::read(&file).unwrap();
+    let key = cache::mesh_key(&mesh);
+    assert!(cache::decode(&bytes, key).is_some());
+    assert!(cache::decode(&bytes, key ^ 1).is_none(), "another mesh's file");
+    assert!(cache::decode(&bytes[..bytes.len() - 1], key).is_none(), "a truncated file");
+    // A damaged file is rebuilt and replaced.
+    std::fs::write(&file, &bytes[..100]).unwrap();
+    let (again, _) = cache::load_or_build(&mesh, Some(&dir));
+    assert!(again == built && std::fs::read(&file).unwrap() == bytes);
+    // A moved vertex is another mesh.
+    let mut moved = mesh.clone();
+    moved.triangles[0].v[0].x += 1e-3;
+    assert_ne!(cache::mesh_key(&moved), key);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

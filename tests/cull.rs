@@ -1,0 +1,129 @@
+//! The cluster culling pass (glsl/cull.comp) read back against its CPU twin (`passes::cull::keeps`), on a
+//! batch of hemicube sensors with a light group (main views, a zoom pair) around a simplified sphere.
+
+mod common;
+
+use ash::vk;
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+use sensorlight::clusters;
+use sensorlight::gpu_types::{CullPush, GpuDrawCommand};
+use sensorlight::passes::cull::{CullBindings, CullPass, gpu_clusters, keeps};
+use sensorlight::scene::Aabb;
+use sensorlight::sensors::SensorKind;
+use sensorlight::sensors::frame::SensorFrame;
+use sensorlight::sensors::layout::SensorLayout;
+use sensorlight::sensors::views::BatchViews;
+use sensorlight::vk::{Buffer, transfer};
+
+#[test]
+fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
+    let mesh = common::meshes::scene();
+    let hierarchy = clusters::build(&mesh);
+    let gpu = gpu_clusters(&hierarchy, |s| mesh.material_of(s).is_emitter());
+    // Sensors on the floor, on the sphere, and far away on a wall; the lamp is the one light group.
+    let frames = [
+        SensorFrame::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y, 1e-3),
+        SensorFrame::new(Vec3::new(1.5, -1.5, -1.0), Vec3::Y, 1e-3),
+        SensorFrame::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z, 1e-3),
+        SensorFrame::new(Vec3::new(0.6, 0.8, 0.0), Vec3::new(0.6, 0.8, 0.0), 1e-3),
+        SensorFrame::new(Vec3::new(-30.0, 0.0, 0.0), Vec3::X, 1e-3),
+    ];
+    let lamp = Aabb { min: Vec3::new(-2.0, 3.0, -2.0), max: Vec3::new(2.0, 3.0, 2.0) };
+    let layout = SensorLayout { kind: SensorKind::Hemicube, groups: 1 };
+    let (rd, near) = (64, 1e-4);
+    let batch = BatchViews::new(&frames, &layout, near, &[lamp], rd);
+    let views = batch.views.len();
+    let max_per_view = gpu.len() as u32;
+    let push = CullPush {
+        clusters: gpu.len() as u32,
+        views: views as u32,
+        per_sensor: batch.per_sensor as u32,
+        max_per_view,
+        rd,
+        near,
+        _pad: [0; 2],
+    };
+    let (counts, commands) = common::gpu(|device| {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let out = storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let clusters = transfer::upload(device, "clusters", &gpu, storage).unwrap();
+        let view_buffer = transfer::upload(device, "views", &batch.views, storage).unwrap();
+        let sensors = transfer::upload(device, "sensors", &batch.sensors, storage).unwrap();
+        let bytes = (views * max_per_view as usize * size_of::<GpuDrawCommand>()) as u64;
+        let commands = Buffer::new(device, "draws", bytes, out, MemoryLocation::GpuOnly).unwrap();
+        let counts = Buffer::new(
+            device,
+            "draw counts",
+            views as u64 * 4,
+            out | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )
+        .unwrap();
+        let pass = CullPass::new(device, 1).unwrap();
+        let bindings = CullBindings {
+            clusters: &clusters,
+            views: &view_buffer,
+            sensors: &sensors,
+            commands: &commands,
+            counts: &counts,
+        };
+        pass.bind(device, 0, &bindings);
+        device
+            .submit_and_wait(|enc| {
+                sensorlight::vk::barrier::global(
+                    enc,
+                    &[sensorlight::vk::Access::TransferWrite],
+                    &[sensorlight::vk::Access::ComputeRead],
+                );
+                pass.record(enc, 0, &counts, &push);
+                Ok(())
+            })
+            .unwrap();
+        let counts: Vec<u32> = transfer::read_buffer(device, &counts, views).unwrap();
+        let commands: Vec<GpuDrawCommand> =
+            transfer::read_buffer(device, &commands, views * max_per_view as usize).unwrap();
+        (counts, commands)
+    });
+    let (mut decisions, mut differ, mut kept) = (0usize, 0usize, 0usize);
+    for v in 0..views {
+        let sensor = &batch.sensors[v / batch.per_sensor];
+        let mut gpu_kept: Vec<u32> = commands[v * max_per_view as usize..][..counts[v] as usize]
+            .iter()
+            .map(|c| {
+                assert_eq!((c.instance_count, c.vertex_offset, c.first_instance), (1, 0, v as u32));
+                c.first_index
+            })
+            .collect();
+        gpu_kept.sort_unstable();
+        let mut cpu_kept: Vec<u32> =
+            gpu.iter().filter(|k| keeps(k, &batch.views[v], sensor, rd, near)).map(|k| k.first_index).collect();
+        cpu_kept.sort_unstable();
+        differ += cpu_kept.iter().filter(|i| gpu_kept.binary_search(i).is_err()).count()
+            + gpu_kept.iter().filter(|i| cpu_kept.binary_search(i).is_err()).count();
+        decisions += gpu.len();
+        kept += cpu_kept.len();
+        // What a view keeps is one level of detail of each surface piece it sees: never a cluster and its
+        // parent's whole group together (checked by index ranges being distinct).
+        let mut unique = cpu_kept.clone();
+        unique.dedup();
+        assert_eq!(unique.len(), cpu_kept.len());
+    }
+    // Float rounding may flip a decision exactly at a boundary; no more than one in a thousand.
+    assert!(differ * 1000 <= decisions, "{differ} of {decisions} decisions differ between GPU and CPU");
+    assert!(kept * 4 < decisions, "culling keeps {kept} of {decisions} (cluster, view) pairs: too many");
+    assert!(kept > views, "every view keeps something? {kept} for {views} views");
+    // The far sensor's views see the sphere (surface 1) coarsely: far fewer triangles than its full detail.
+    let far = &batch.views[4 * batch.per_sensor..5 * batch.per_sensor];
+    let far_sensor = batch.sensors[4];
+    let ball = |i: &usize| hierarchy.clusters[*i].surface == 1;
+    let gpu = &gpu;
+    let drawn: u32 = far
+        .iter()
+        .flat_map(|view| (0..gpu.len()).filter(ball).filter(move |&i| keeps(&gpu[i], view, &far_sensor, rd, near)))
+        .map(|i| gpu[i].index_count / 3)
+        .sum();
+    let full: u32 =
+        (0..gpu.len()).filter(ball).filter(|&i| gpu[i].errors.x == 0.0).map(|i| gpu[i].index_count / 3).sum();
+    assert!(drawn > 0 && drawn * 10 < full, "the far sensor draws {drawn} of the sphere's {full} triangles");
+}
