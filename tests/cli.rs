@@ -123,7 +123,7 @@ fn a_tiny_memory_budget_means_more_batches_not_failure() {
 #[test]
 fn bad_render_parameters_are_clear_errors() {
     let scene = common::project("scenes/cornell/cornell.toml");
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["--width", "0"], "--width"),
         (&["--sensor-size", "0"], "--sensor-size"),
         (&["--fov", "0"], "--fov"),
@@ -133,6 +133,7 @@ fn bad_render_parameters_are_clear_errors() {
         (&["--epsilon", "-0.5"], "--epsilon"),
         (&["--tile", "12"], "--tile must be a power of two"),
         (&["--dradiance", "-1"], "--dradiance"),
+        (&["--filter-radius", "181"], "--filter-radius must be at most 64"),
     ];
     for (flags, expected) in cases {
         let out = common::scratch("render_bad").join("x.exr");
