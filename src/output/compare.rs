@@ -101,8 +101,7 @@ impl Picture {
         let noise = if layer.is_empty() { "std_error".to_owned() } else { format!("{layer}_std_error") };
         let error: Option<Vec<Vec<f32>>> = ["R", "G", "B"].iter().map(|c| take(&format!("{noise}.{c}"))).collect();
         let std_error = error.map(|e| (0..width * height).map(|i| [e[0][i], e[1][i], e[2][i]]).collect());
-        let emission: Option<Vec<Vec<f32>>> =
-            ["R", "G", "B"].iter().map(|c| take(&format!("emission.{c}"))).collect();
+        let emission: Option<Vec<Vec<f32>>> = ["R", "G", "B"].iter().map(|c| take(&format!("emission.{c}"))).collect();
         let emitter = emission.map(|e| (0..width * height).map(|i| e.iter().any(|c| c[i] > 0.0)).collect());
         Ok(Self { name: path.display().to_string(), width, height, rgb, surface_id, std_error, emitter })
     }
