@@ -46,8 +46,11 @@ fn render(scene: &str, name: &str, extra: &[&str]) -> std::path::PathBuf {
     args.extend_from_slice(extra);
     let run = common::sensorlight(&args);
     assert!(run.status.success(), "{}", common::stderr(&run));
-    assert!(common::stderr(&run).contains("sensor time"), "prints its statistics");
-    assert!(common::stderr(&run).contains("strategy: "), "says which batching strategy it uses");
+    let stderr = common::stderr(&run);
+    assert!(stderr.contains("sensor time"), "prints its statistics: {stderr}");
+    assert!(stderr.contains("; strategy "), "says which batching strategy it uses: {stderr}");
+    // Standard error is a pipe here: plain progress lines, ending with the whole image resolved.
+    assert!(stderr.contains("100 % of pixels resolved"), "{stderr}");
     dir
 }
 
@@ -72,7 +75,10 @@ fn render_writes_image_aovs_and_stats_of_both_cornell_boxes() {
         for (i, (mask, id)) in c[4].iter().zip(&c[5]).enumerate() {
             assert_eq!(*mask > 0.0, *id > 0.0, "{name}: pixel {i} mask vs surface id");
         }
-        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats_path).unwrap()).unwrap();
+        let stats_text = std::fs::read_to_string(&stats_path).unwrap();
+        assert!(stats_text.ends_with("}\n"), "{name}: the JSON ends with a newline");
+        let stats: serde_json::Value = serde_json::from_str(&stats_text).unwrap();
+        assert!(stats["build_seconds"].as_f64().is_some(), "{name}: the strategy choice's time is reported");
         let sensed = c[4].iter().filter(|&&m| m == 1.0).count() as u64;
         assert_eq!(stats["sensors"].as_u64(), Some(sensed), "{name}: sensors counted = sensors in the mask");
         assert_eq!(stats["sensor_size"].as_u64(), Some(16));
@@ -208,4 +214,191 @@ fn a_full_stdout_is_an_error_said_once() {
     assert!(stderr.contains("cannot write to standard output"), "{stderr}");
     assert_eq!(stderr.matches("No space left on device").count(), 1, "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+/// Every long flag `--help` shows is documented in the README: a command's flags in its own section
+/// (`### \`sensorlight COMMAND …\``), the global ones (`-v`, `-q`) anywhere.
+#[test]
+fn every_flag_in_help_is_in_the_readme() {
+    let readme = std::fs::read_to_string(common::project("README.md")).unwrap();
+    let section = |command: &str| -> &str {
+        let heading = format!("### `sensorlight {command}");
+        let Some(at) = readme.find(&heading) else { panic!("README.md has no section {heading}`") };
+        let rest = &readme[at + heading.len()..];
+        let end = [rest.find("\n### "), rest.find("\n## ")].into_iter().flatten().min().unwrap_or(rest.len());
+        &rest[..end]
+    };
+    let has = |text: &str, flag: &str| {
+        text.match_indices(flag)
+            .any(|(at, _)| !text[at + flag.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-'))
+    };
+    let long_flags = |args: &[&str]| -> Vec<String> {
+        let run = common::sensorlight(args);
+        assert!(run.status.success(), "{args:?}");
+        let help = String::from_utf8_lossy(&run.stdout).into_owned();
+        let words = help.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'));
+        let mut flags: Vec<String> = words
+            .filter(|w| w.len() > 2 && w.starts_with("--") && w.as_bytes()[2].is_ascii_lowercase())
+            .map(str::to_owned)
+            .collect();
+        flags.dedup();
+        flags
+    };
+    let global = long_flags(&["--help"]);
+    assert!(global.contains(&"--verbose".to_owned()) && global.contains(&"--quiet".to_owned()), "{global:?}");
+    let mut missing = Vec::new();
+    for flag in &global {
+        if !has(&readme, flag) && !["--help", "--version"].contains(&flag.as_str()) {
+            missing.push(format!("sensorlight {flag}"));
+        }
+    }
+    for command in ["devices", "render", "reference", "compare", "bench", "metrics"] {
+        let text = section(command);
+        for flag in long_flags(&[command, "--help"]) {
+            if !has(text, &flag) && !global.contains(&flag) {
+                missing.push(format!("{command} {flag}"));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "flags missing from their README.md sections: {missing:?}");
+}
+
+fn tiny(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["render", scene, "-o", out.to_str().unwrap(), "--width", "16", "--height", "16"];
+    args.extend_from_slice(&["--sensor-size", "16"]);
+    args.extend_from_slice(extra);
+    common::sensorlight(&args)
+}
+
+/// Default: progress, the summary and the files; `-q`: nothing; `-v`: the device, the strategy, the rounds.
+/// The strategy's self-check refusals (multiview on lavapipe 22.3) are no default business.
+#[test]
+fn quiet_default_and_verbose_say_what_they_promise() {
+    let dir = common::scratch("verbosity");
+    let out = dir.join("out.exr");
+    let scene = "scenes/cornell/cornell.toml";
+    let quiet = tiny(scene, &out, &["-q"]);
+    assert!(quiet.status.success() && quiet.stderr.is_empty(), "-q: {}", common::stderr(&quiet));
+    let normal = common::stderr(&tiny(scene, &out, &[]));
+    assert!(normal.contains("rendered in") && normal.contains("wrote "), "{normal}");
+    for detail in ["self-check", "FAILS", "refused", "device: ", "round 1:"] {
+        assert!(!normal.contains(detail), "default output says {detail:?}: {normal}");
+    }
+    let verbose = common::stderr(&tiny(scene, &out, &["-v"]));
+    for detail in ["device: ", "strategy: ", "round 1: ", "per refinement round"] {
+        assert!(verbose.contains(detail), "-v lacks {detail:?}: {verbose}");
+    }
+    // A failure still says why with -q.
+    let failed = tiny("no-such-scene.toml", &out, &["-q"]);
+    assert_eq!(failed.status.code(), Some(1));
+    assert!(common::stderr(&failed).contains("no-such-scene.toml"));
+}
+
+/// `--preview-every 1` writes OUT.preview.png after each round (said with -v) beside, never over, the final
+/// outputs, and removes it when the render is done.
+#[test]
+fn previews_are_written_each_round_and_removed() {
+    let dir = common::scratch("preview");
+    let out = dir.join("out.exr");
+    let run = tiny("scenes/cornell/cornell.toml", &out, &["--preview-every", "1", "-v"]);
+    let stderr = common::stderr(&run);
+    assert!(run.status.success(), "{stderr}");
+    let preview = dir.join("out.preview.png");
+    assert!(stderr.contains(&format!("preview after round 1: {}", preview.display())), "{stderr}");
+    assert!(!preview.exists(), "the preview is gone once the render is");
+    assert!(out.exists() && dir.join("out.png").exists());
+    common::expect_failure(
+        &["render", "scenes/cornell/cornell.toml", "-o", out.to_str().unwrap(), "--preview-every", "0"],
+        "--preview-every",
+    );
+}
+
+/// A bare mesh renders with a camera that frames it; `--write-scene` writes that scene as TOML, which loads.
+#[test]
+fn a_mesh_renders_with_an_automatic_camera_and_writes_its_scene() {
+    let dir = common::scratch("mesh_input");
+    let out = dir.join("box.exr");
+    let toml = dir.join("box.toml");
+    // Open towards +z: the automatic camera, looking along −z, sees into it.
+    let mesh = common::project("scenes/cornell-mcguire/CornellBox-Original.obj");
+    let run = tiny(mesh.to_str().unwrap(), &out, &["--write-scene", toml.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let (w, h, c) = exr::read_channels(&out, &["R", "G", "B"]).unwrap();
+    assert_eq!((w, h), (16, 16));
+    assert!(c[0].iter().any(|&r| r > 0.0), "lit");
+    let scene = sensorlight::scene::Scene::load(&toml).unwrap();
+    assert_eq!(
+        scene.mesh.triangles.len(),
+        sensorlight::scene::Scene::from_mesh(&mesh, scene.image).unwrap().mesh.triangles.len()
+    );
+    assert_eq!((scene.image.width, scene.image.height), (16, 16));
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+
+    // A mesh with no light is lit by a white sky, and says so.
+    std::fs::write(dir.join("quad.obj"), "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv 0 1 0\nf 1 4 3 2\nf 1 2 5\n")
+        .unwrap();
+    let quad = dir.join("quad.obj");
+    let run = tiny(quad.to_str().unwrap(), &dir.join("quad.exr"), &[]);
+    let stderr = common::stderr(&run);
+    assert!(run.status.success() && stderr.contains("white sky"), "{stderr}");
+    assert!(!stderr.contains("no surface emits light"), "the sky answers that warning: {stderr}");
+    let (_, _, c) = exr::read_channels(&dir.join("quad.exr"), &["G"]).unwrap();
+    assert!(c[0].iter().any(|&g| g > 0.1), "the sky lights the mesh");
+}
+
+/// A file of the wrong kind is named as such, with what was expected; nothing is written.
+#[test]
+fn a_file_of_the_wrong_kind_is_named() {
+    let dir = common::scratch("wrong_kind");
+    let png = dir.join("picture.png");
+    std::fs::write(&png, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR").unwrap();
+    let renamed = dir.join("picture.toml");
+    std::fs::copy(&png, &renamed).unwrap();
+    let out = dir.join("x.exr");
+    let out = out.to_str().unwrap();
+    for input in [&png, &renamed] {
+        let input = input.to_str().unwrap();
+        let stderr = common::expect_failure(
+            &["render", input, "-o", out],
+            "is a PNG image; expected a scene file (TOML) or an OBJ mesh",
+        );
+        assert!(stderr.contains(input), "{stderr}");
+    }
+    let mesh = common::project("scenes/cornell/cornell.obj");
+    let mesh = mesh.to_str().unwrap();
+    common::expect_failure(
+        &["metrics", "--quick", "--scene", mesh, "-o", dir.to_str().unwrap()],
+        "cornell.obj is an OBJ mesh; this command needs a scene file (TOML)",
+    );
+    common::expect_failure(&["bench", "--scene", mesh, "--sizes", "8"], "needs a scene file (TOML)");
+    assert!(!dir.join("x.exr").exists() && !dir.join("metrics.json").exists());
+    let err = sensorlight::scene::Scene::load(std::path::Path::new(mesh)).unwrap_err().to_string();
+    assert!(err.contains("is an OBJ mesh, not a scene file (TOML)"), "{err}");
+}
+
+/// `reference` tone-maps its PNG with the scene's `[render] exposure`, as `render` does.
+#[test]
+fn reference_honours_the_scenes_exposure() {
+    let dir = common::scratch("reference_exposure");
+    for f in ["cornell.obj", "cornell.mtl"] {
+        std::fs::copy(common::project("scenes/cornell").join(f), dir.join(f)).unwrap();
+    }
+    let toml = std::fs::read_to_string(common::project("scenes/cornell/cornell.toml")).unwrap();
+    assert!(toml.contains("exposure = 1.0"), "the shipped scene sets its exposure");
+    std::fs::write(dir.join("scene.toml"), &toml).unwrap();
+    std::fs::write(dir.join("plain.toml"), toml.replace("exposure = 1.0", "exposure = 0.0")).unwrap();
+    let png = |scene: &str, name: &str, extra: &[&str]| {
+        let out = dir.join(format!("{name}.exr"));
+        let mut args = vec!["reference", scene, "-o", out.to_str().unwrap(), "--width", "8", "--height", "8"];
+        args.extend_from_slice(&["--samples", "4"]);
+        args.extend_from_slice(extra);
+        let run = common::sensorlight(&args);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        std::fs::read(out.with_extension("png")).unwrap()
+    };
+    let (scene, plain) = (dir.join("scene.toml"), dir.join("plain.toml"));
+    let (scene, plain) = (scene.to_str().unwrap(), plain.to_str().unwrap());
+    let from_scene = png(scene, "a", &[]);
+    assert_eq!(from_scene, png(plain, "b", &["--exposure", "1"]), "the scene's exposure = the flag's");
+    assert_ne!(from_scene, png(plain, "c", &[]), "exposure changes the PNG");
 }

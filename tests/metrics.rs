@@ -102,3 +102,23 @@ fn bad_metrics_arguments_are_clear_errors() {
     common::expect_failure(&["metrics", "--quick", "-o", file.to_str().unwrap()], "is not a directory");
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
 }
+
+/// From any directory: the default scene comes from the source tree the binary was built from; text outputs
+/// end with a newline.
+#[test]
+fn metrics_run_from_another_directory_and_end_lines() {
+    let dir = common::scratch("metrics_elsewhere");
+    let run = common::command()
+        .current_dir(&dir)
+        .args(["metrics", "--table1", "--resolutions", "40x30", "--sensor-size", "16", "-o", "out"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let json = std::fs::read_to_string(dir.join("out/metrics.json")).unwrap();
+    assert!(json.ends_with("}\n"), "metrics.json ends with a newline");
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(json["config"]["scene"], "scenes/cornell/cornell.toml", "the default scene, named as in the tree");
+    for file in ["table1.csv", "table1.md"] {
+        assert!(std::fs::read_to_string(dir.join("out").join(file)).unwrap().ends_with('\n'), "{file}");
+    }
+}

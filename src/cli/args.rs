@@ -15,7 +15,7 @@ pub struct EstimatorFlags {
     #[arg(
         long,
         value_enum,
-        help = format!("Sensor kind [default: {DEFAULT_SENSOR}; for `metrics`: {}, the paper's]", SensorShape::Frustum)
+        help = format!("Sensor kind [default: {DEFAULT_SENSOR}]")
     )]
     pub sensor: Option<SensorShape>,
     #[arg(

@@ -81,15 +81,16 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
         let report = bench::run(device, &config, &mut |event| match event {
             BenchEvent::Round { .. } => bar.inc(1),
-            BenchEvent::Checked { strategy, result } => {
+            BenchEvent::Checked { strategy, result } if super::say::verbose() => {
                 bar.suspend(|| eprintln!("self-check {strategy}: max difference {:.2e}", result.max_difference))
             }
+            BenchEvent::Checked { .. } => {}
         })?;
         bar.finish_and_clear();
         // The files first: a reader of the table that stops early (`| head`) does not lose them.
         let mut files = atomic::Outputs::new();
         if let Some(path) = &args.json {
-            files.stage_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
+            files.stage_bytes(path, sensorlight::output::json_text(&report)?.as_bytes())?;
         }
         if let Some(path) = &args.csv {
             files.stage_bytes(path, report.csv().as_bytes())?;

@@ -1,20 +1,21 @@
 //! `sensorlight metrics`: the paper's Table I, Fig. 10 and Fig. 11 on this device.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
-use indicatif::ProgressBar;
 use sensorlight::metrics::{self, MetricsConfig, report};
 use sensorlight::params::{EstimatorKind, Overrides, RenderParams, SensorShape};
-use sensorlight::scene::{ImageSize, Scene};
+use sensorlight::renderer::Quiet;
+use sensorlight::scene::ImageSize;
 use sensorlight::strategy::{Cache, StrategyRequest};
 
 use super::args::{EstimatorFlags, RefinementFlags, estimator_help};
 
 #[derive(Args)]
+#[command(mut_arg("sensor", |a| a.help(format!("Sensor kind [default: {}, the paper's]", SensorShape::Frustum))))]
 pub struct MetricsArgs {
     /// Output directory (created if needed): CSV, Markdown, SVG and PNG per experiment, and metrics.json
     #[arg(short, long)]
@@ -30,8 +31,7 @@ pub struct MetricsArgs {
     /// Fig. 11: number of sensors against sensor map size (from the same renders as Fig. 10)
     #[arg(long)]
     fig11: bool,
-    /// Scene file [default: scenes/cornell/cornell.toml]
-    #[arg(long)]
+    #[arg(long, help = format!("Scene file (TOML) [default: {DEFAULT_SCENE} of the source tree it was built from]"))]
     scene: Option<PathBuf>,
     /// Sensor map size of Table I [default: 256, as the paper; 32 with --quick]
     #[arg(long)]
@@ -69,20 +69,37 @@ fn parse_resolution(s: &str) -> Result<ImageSize, String> {
     }
 }
 
-pub fn run(args: MetricsArgs) -> Result<ExitCode> {
-    let scene_path = args.scene.clone().unwrap_or_else(|| PathBuf::from("scenes/cornell/cornell.toml"));
-    if args.scene.is_none() && !scene_path.exists() {
-        bail!("no --scene given and {} is not here: run from the project root or pass --scene", scene_path.display());
+/// The scene of the metrics when none is given, relative to the source tree.
+const DEFAULT_SCENE: &str = "scenes/cornell/cornell.toml";
+
+/// The default scene, found in the source tree the binary was built from (`CARGO_MANIFEST_DIR` at build
+/// time), so that `metrics` runs from any directory, and an installed binary says what is missing.
+fn default_scene() -> Result<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE);
+    if !path.is_file() {
+        bail!(
+            "no --scene given, and the default scene {} (in the source tree this binary was built from) is not \
+             there; pass --scene SCENE.toml",
+            path.display()
+        );
     }
+    Ok(path)
+}
+
+pub fn run(args: MetricsArgs) -> Result<ExitCode> {
+    let scene_path = match &args.scene {
+        Some(path) => path.clone(),
+        None => default_scene()?,
+    };
+    // Recorded as given, the default as the source tree names it: the same command writes the same bytes
+    // wherever the tree lies.
+    let scene_name = args.scene.as_ref().map_or_else(|| DEFAULT_SCENE.to_owned(), |p| p.display().to_string());
     ensure!(
         !args.output.exists() || args.output.is_dir(),
         "-o {}: exists and is not a directory",
         args.output.display()
     );
-    let scene = Scene::load(&scene_path)?;
-    for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
-    }
+    let scene = super::load_scene_file(&scene_path)?;
     let from_file = Overrides::from_scene_table(&scene_path, &scene.render)?;
     // The paper's sensor and map size unless the command line or the scene says otherwise.
     // The paper's experiment: its estimator, sensor and map size unless told otherwise.
@@ -98,7 +115,7 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
         ..args.estimator_flags.overrides()
     });
     let params = RenderParams::resolve(Some((&scene_path, &from_file)), &overrides)?;
-    let mut config = MetricsConfig::new(scene_path.display().to_string(), params.clone());
+    let mut config = MetricsConfig::new(scene_name, params.clone());
     if args.quick {
         config = config.quick();
     }
@@ -124,11 +141,10 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
         let start = Instant::now();
         let mut cache = Cache::open_default();
         // The bar counts renders; sensors within a render are not shown.
-        let sensors = super::SensorBar(ProgressBar::hidden());
-        let results = metrics::run(device, &scene, &config, &mut cache, &sensors, &mut |run| {
+        let results = metrics::run(device, &scene, &config, &mut cache, &Quiet, &mut |run| {
             let s = &run.stats;
             overall.suspend(|| {
-                eprintln!(
+                say!(
                     "{:?} {}x{} rd {} ({}): {} sensors, {:.4} ms/sensor, {:.1} s",
                     run.experiment,
                     s.width,
@@ -150,9 +166,9 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
             total_seconds: start.elapsed().as_secs_f64(),
         };
         let files = report::write(&args.output, &header, &results).context("writing the metrics")?;
-        eprintln!("{} renders in {:.1} s; wrote:", results.len(), header.total_seconds);
+        say!("{} renders in {:.1} s; wrote:", results.len(), header.total_seconds);
         for f in files {
-            eprintln!("  {}", f.display());
+            say!("  {}", f.display());
         }
         Ok(())
     })

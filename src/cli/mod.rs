@@ -1,25 +1,35 @@
 //! Sub-commands. Each parses its flags here and hands the library a scene and parameters.
 
+/// `eprintln!` unless `-q` (see `say`).
+macro_rules! say {
+    ($($arg:tt)*) => {
+        if $crate::cli::say::normal() {
+            eprintln!($($arg)*);
+        }
+    };
+}
+
 mod args;
 mod bench;
 mod compare;
 mod devices;
 mod metrics;
+mod progress;
 mod reference;
 mod render;
+mod say;
 
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::Arc;
 
-use anyhow::{Context as _, Result};
+use anyhow::{Context as _, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::gbuffer::GBufferData;
 use sensorlight::output::exr::ExrImage;
 use sensorlight::params::{Overrides, ParamError, RenderParams};
-use sensorlight::renderer::Progress;
-use sensorlight::scene::Scene;
+use sensorlight::scene::{FileKind, ImageSize, Mesh, Scene, auto_camera};
 use sensorlight::strategy::Event;
 use sensorlight::vk::{Device, DeviceOptions};
 
@@ -30,6 +40,12 @@ use sensorlight::vk::{Device, DeviceOptions};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Say more: the device, the strategy's self-checks and measurements, per-round statistics
+    #[arg(short, long, global = true, conflicts_with = "quiet", display_order = 1000)]
+    verbose: bool,
+    /// Say nothing but errors (no warnings, no progress)
+    #[arg(short, long, global = true, display_order = 1000)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -49,6 +65,11 @@ enum Command {
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
+    say::set(match (cli.quiet, cli.verbose) {
+        (true, _) => say::Verbosity::Quiet,
+        (_, true) => say::Verbosity::Verbose,
+        _ => say::Verbosity::Normal,
+    });
     match cli.command {
         Command::Devices => devices::run(),
         Command::Render(args) => render::run(args),
@@ -59,19 +80,78 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     }
 }
 
-/// Loads the scene at `path` and resolves the parameters: `flags` over its `[render]` table over the
+/// Loads the scene file at `path` and prints its warnings. A mesh given instead is told how to get a scene.
+fn load_scene_file(path: &Path) -> Result<Scene> {
+    if FileKind::of(path) == FileKind::ObjMesh {
+        bail!(
+            "{} is an OBJ mesh; this command needs a scene file (TOML). `sensorlight render {} -o out.exr \
+             --write-scene SCENE.toml` writes one, with a camera that frames the mesh",
+            path.display(),
+            path.display()
+        );
+    }
+    let scene = Scene::load(path)?;
+    warn_all(&scene.warnings);
+    Ok(scene)
+}
+
+fn warn_all(warnings: &[String]) {
+    if say::normal() {
+        for warning in warnings {
+            eprintln!("warning: {warning}");
+        }
+    }
+}
+
+/// Loads the scene file at `path` and resolves the parameters: `flags` over its `[render]` table over the
 /// defaults. Prints the scene's warnings.
 fn load_scene(path: &Path, flags: &Overrides) -> Result<(Scene, RenderParams)> {
-    let scene = Scene::load(path)?;
-    for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
-    }
-    let from_file = Overrides::from_scene_table(path, &scene.render)?;
-    let params = RenderParams::resolve(Some((path, &from_file)), flags)?;
-    for warning in params.warnings(scene.mesh.brightest_emission()) {
-        eprintln!("warning: {warning}");
-    }
+    let scene = load_scene_file(path)?;
+    resolve(scene, flags)
+}
+
+fn resolve(scene: Scene, flags: &Overrides) -> Result<(Scene, RenderParams)> {
+    let from_file = Overrides::from_scene_table(&scene.path, &scene.render)?;
+    let params = RenderParams::resolve(Some((&scene.path, &from_file)), flags)?;
+    warn_all(&params.warnings(scene.mesh.brightest_emission()));
     Ok((scene, params))
+}
+
+/// Loads what `path` holds: a scene file, or an OBJ mesh, given a camera that frames it, an image of
+/// `width` × `height` (each by default the automatic camera's), and, if nothing in it emits, a white sky
+/// (background 1,1,1: the image is then never black). Anything else is named and refused.
+fn load_input(
+    path: &Path,
+    flags: &Overrides,
+    (width, height): (Option<u32>, Option<u32>),
+) -> Result<(Scene, RenderParams)> {
+    match FileKind::of(path) {
+        FileKind::Scene => load_scene(path, flags),
+        FileKind::ObjMesh => {
+            let default = auto_camera::DEFAULT_IMAGE;
+            let size = ImageSize {
+                // Zero is refused by the flags' own check, with the flag's name.
+                width: width.filter(|&w| w > 0).unwrap_or(default.width),
+                height: height.filter(|&h| h > 0).unwrap_or(default.height),
+            };
+            let mut scene = Scene::from_mesh(path, size)?;
+            if !scene.mesh.emits_light() {
+                scene.warnings.retain(|w| w != Mesh::NO_EMITTER);
+                let white = toml::Value::Array(vec![toml::Value::Float(1.0); 3]);
+                scene.render.insert("background".into(), white);
+                if say::normal() && flags.background.is_none() {
+                    eprintln!(
+                        "note: nothing in {} emits light: it is lit by a white sky (--background 1,1,1; the flag \
+                         changes it)",
+                        path.display()
+                    );
+                }
+            }
+            warn_all(&scene.warnings);
+            resolve(scene, flags)
+        }
+        kind => bail!("{} is {}; expected a scene file (TOML) or an OBJ mesh", path.display(), kind.describe()),
+    }
 }
 
 /// Names a [`ParamError`] found by the library (e.g. a device limit) as the user set the value.
@@ -105,7 +185,9 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
         Some(i) => Device::new(&options).with_context(|| format!("--device {i} (see `sensorlight devices`)"))?,
         None => Device::new(&options)?,
     };
-    eprintln!("device: {}", device.adapter);
+    if say::verbose() {
+        eprintln!("device: {}", device.adapter);
+    }
     let log = device.validation_log().clone();
     let result = work(&device);
     drop(device);
@@ -118,46 +200,39 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
     Ok(ExitCode::SUCCESS)
 }
 
-/// Says what the strategy choice found worth saying: refusals, and what `auto` measured.
-fn report_strategy_event(event: Event) {
+/// What the strategy choice found, for `-v`: refusals (multiview on lavapipe 22.3, a driver bug, is no
+/// concern of a user who did not ask), and what `auto` measured.
+fn strategy_event_text(event: &Event) -> Option<String> {
     match event {
         Event::Checked { strategy, result, cached } if !result.passed => {
-            let how = if cached { "self-check (cached)" } else { "self-check" };
-            eprintln!(
-                "{how}: {strategy} vs per-sensor: max difference {:.2e} of the brightest R: FAILS (refused on this device)",
+            let how = if *cached { "self-check (cached)" } else { "self-check" };
+            Some(format!(
+                "{how}: {strategy} vs per-sensor: max difference {:.2e} of the brightest R: fails, not used on this \
+                 device",
                 result.max_difference
-            );
+            ))
         }
         Event::Measured { rd, per_sensor } => {
             let timings: Vec<String> =
                 per_sensor.iter().map(|(k, t)| format!("{k} {:.3} ms", t.as_secs_f64() * 1e3)).collect();
-            eprintln!("auto: per sensor at rd {rd}: {}", timings.join(", "));
+            Some(format!("auto: per sensor at rd {rd}: {}", timings.join(", ")))
         }
-        Event::Unsupported { strategy, why } => eprintln!("{strategy}: unsupported here ({why})"),
-        Event::Checked { .. } => {}
+        Event::Unsupported { strategy, why } => Some(format!("{strategy}: unsupported here ({why})")),
+        Event::Checked { .. } => None,
     }
 }
 
-/// Sensors rendered so far, on a progress bar whose length grows as refinement rounds add sensors.
-struct SensorBar(ProgressBar);
-
-impl Progress for SensorBar {
-    fn queued(&self, n: u64) {
-        self.0.inc_length(n);
-    }
-    fn done(&self, n: u64) {
-        self.0.inc(n);
-    }
-}
-
-/// A progress bar on stderr (hidden when stderr is not a terminal).
 /// The G-buffer channels that let `compare` mask what it should not judge: `surface_id` (silhouettes) and
 /// `emission.*` (emitters, whose `Le` is given, not estimated).
 fn gbuffer_aovs(exr: ExrImage, g: &GBufferData) -> ExrImage {
     exr.rgb("emission", &g.emission).scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
 }
 
+/// A progress bar on stderr (hidden when stderr is not a terminal, and with `-q`).
 fn progress_bar(total: u64, unit: &str) -> ProgressBar {
+    if !say::normal() {
+        return ProgressBar::hidden();
+    }
     let bar = ProgressBar::new(total);
     let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");
     let style = ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());

@@ -14,7 +14,7 @@ use super::args::{EstimatorFlags, ImageFlags};
 
 #[derive(Args)]
 pub struct ReferenceArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML), or an OBJ mesh (a camera framing it, as `render` does)
     scene: PathBuf,
     /// Output EXR: RGB = Le + Kd·R, plus radiance.* (R), and the estimated noise of each: std_error.* and
     /// radiance_std_error.* (what `compare` reports as the reference's noise)
@@ -37,7 +37,7 @@ pub struct ReferenceArgs {
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     super::check_exr_outputs(&args.output, args.image.write_png(), &[], &[&args.scene])?;
     let flags = Overrides { exposure: args.image.exposure, ..args.estimator.overrides() };
-    let (scene, resolved) = super::load_scene(&args.scene, &flags)?;
+    let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height))?;
     super::check_exr_outputs(&args.output, args.image.write_png(), &[], &scene.input_paths())?;
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;
@@ -46,7 +46,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         0 => "a direction each: the scene has no emitters".to_string(),
         n => format!("a direction + a point on one of {n} emitter triangles each"),
     };
-    eprintln!(
+    say!(
         "reference: {}x{}, {} sensor domain, ε {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
         size.height,
@@ -61,7 +61,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let result = integrator.render(size, &|rows| bar.inc(rows));
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    eprintln!(
+    say!(
         "cast {:.1} M rays in {seconds:.2} s: {:.2} M rays/s on {} threads; noise: mean relative standard error of R {:.3} %",
         result.rays as f64 * 1e-6,
         result.rays as f64 * 1e-6 / seconds,
@@ -82,7 +82,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     }
     files.commit()?;
     for path in [Some(&args.output), png_path.as_ref()].into_iter().flatten() {
-        eprintln!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,7 +1,8 @@
 //! `sensorlight render`: scene in, EXR (+ PNG preview, + stats) out.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result};
 use clap::Args;
@@ -9,13 +10,17 @@ use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{DEFAULT_ESTIMATOR, EstimatorKind, Overrides, RenderParams};
 use sensorlight::renderer::{DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
-use sensorlight::strategy::{Cache, StrategyRequest};
+use sensorlight::scene::Scene;
+use sensorlight::strategy::{Cache, Event, StrategyRequest};
 
 use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, estimator_help, sensor_size_help};
+use super::progress::{Preview, RenderProgress};
+use super::say;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML), or an OBJ mesh: then a camera frames it, the image is 256×256 unless --width and
+    /// --height say otherwise, and a mesh that emits no light is lit by a white sky
     scene: PathBuf,
     /// Output EXR (linear radiance), written to a temporary name and renamed.
     #[arg(short, long)]
@@ -50,6 +55,13 @@ pub struct RenderArgs {
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
+    /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
+    /// the render ends
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    preview_every: Option<u32>,
+    /// Also write the scene as rendered (for a mesh: its automatic camera) as a TOML scene file to edit
+    #[arg(long, value_name = "SCENE.toml")]
+    write_scene: Option<PathBuf>,
 }
 
 impl RenderArgs {
@@ -63,16 +75,42 @@ impl RenderArgs {
     }
 }
 
+/// Where `--preview-every` writes: beside the EXR, never one of the final outputs, so that their all-or-none
+/// staging is untouched (a preview is written whole, by its own rename, each time).
+fn preview_path(output: &Path) -> PathBuf {
+    output.with_extension("preview.png")
+}
+
 pub fn run(args: RenderArgs) -> Result<ExitCode> {
-    let stats_json: Vec<_> = args.stats_json.iter().map(|p| ("--stats-json", p.as_path())).collect();
-    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &[&args.scene])?;
-    let (scene, params) = super::load_scene(&args.scene, &args.overrides())?;
+    let preview = args.preview_every.map(|_| preview_path(&args.output));
+    let mut extra: Vec<(&str, &Path)> = Vec::new();
+    extra.extend(args.stats_json.as_deref().map(|p| ("--stats-json", p)));
+    extra.extend(args.write_scene.as_deref().map(|p| ("--write-scene", p)));
+    extra.extend(preview.as_deref().map(|p| ("the --preview-every preview", p)));
+    if let Some(path) = &args.write_scene {
+        atomic::check_extension(path, "toml")?;
+    }
+    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &[&args.scene])?;
+    let (scene, params) = super::load_input(&args.scene, &args.overrides(), (args.image.width, args.image.height))?;
     // Again with the mesh and its materials, known now.
-    super::check_exr_outputs(&args.output, args.image.write_png(), &stats_json, &scene.input_paths())?;
+    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &scene.input_paths())?;
     let size = args.image.size(&scene)?;
     super::with_device(args.device, |device| {
+        let started = Instant::now();
+        let preview =
+            preview.map(|path| Preview { every: args.preview_every.unwrap_or(1), path, exposure: params.exposure });
+        let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview);
+        let _remove_preview = RemoveOnDrop(preview_path(&args.output), args.preview_every.is_some());
         let mut cache = Cache::open_default();
-        let mut report = super::report_strategy_event;
+        let mut measured = Vec::new();
+        let mut report = |event: Event| {
+            if let (true, Some(text)) = (say::verbose(), super::strategy_event_text(&event)) {
+                progress.say(&text);
+            }
+            if let Event::Measured { per_sensor, .. } = event {
+                measured = per_sensor;
+            }
+        };
         let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
             .estimator(params.estimator_kind)
             .memory_budget(args.memory_budget.map(|mib| mib << 20))
@@ -82,16 +120,53 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             .on_strategy_event(&mut report)
             .build()
             .map_err(|e| super::attribute(&params, e))?;
-        eprintln!("strategy: {} ({})", renderer.strategy(), renderer.choice().reason);
-        let bar = super::SensorBar(super::progress_bar(0, "sensors"));
-        let output = renderer.render(size, &params.frame(), &bar)?;
-        bar.0.finish_and_clear();
-        print_stats(&output.stats);
-        write_outputs(&args, &params, &output)
+        if let Some(&(_, t)) = measured.iter().find(|(kind, _)| *kind == renderer.strategy()) {
+            progress.probe_measured(t);
+        }
+        if say::verbose() {
+            progress.say(&format!("strategy: {} ({})", renderer.strategy(), renderer.choice().reason));
+        }
+        let output = renderer.render(size, &params.frame(), &progress)?;
+        progress.complete();
+        progress.finish();
+        print_stats(&output.stats, started.elapsed());
+        write_outputs(&args, &scene, &params, &output)
     })
 }
 
-fn print_stats(s: &RenderStats) {
+/// Removes the preview file when the render ends, whichever way: it showed a render in progress.
+struct RemoveOnDrop(PathBuf, bool);
+
+impl Drop for RemoveOnDrop {
+    fn drop(&mut self) {
+        if self.1 {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+}
+
+/// One line by default; with `-v` the counts and the split of the time.
+fn print_stats(s: &RenderStats, wall: Duration) {
+    if !say::normal() {
+        return;
+    }
+    eprintln!(
+        "rendered in {:.2} s (strategy choice and setup {:.2} s + render {:.2} s): {} sensors, sensor time {:.4} ms; \
+         strategy {}, {}",
+        wall.as_secs_f64(),
+        s.build_seconds,
+        s.total_seconds,
+        s.sensors,
+        s.sensor_time_ms,
+        s.strategy,
+        s.device
+    );
+    if say::verbose() {
+        print_details(s);
+    }
+}
+
+fn print_details(s: &RenderStats) {
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
     let read_back: u64 = s.readback_bytes_per_round.iter().sum();
     eprintln!(
@@ -128,7 +203,7 @@ fn print_stats(s: &RenderStats) {
     );
 }
 
-fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -> Result<()> {
+fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &RenderOutput) -> Result<()> {
     let size = out.size;
     let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
     if args.aovs {
@@ -147,13 +222,19 @@ fn write_outputs(args: &RenderArgs, params: &RenderParams, out: &RenderOutput) -
     if let Some(path) = &png_path {
         png::stage(&mut files, path, (size.width, size.height), &out.image, params.exposure)?;
     }
+    if let Some(path) = &args.write_scene {
+        files.stage_bytes(path, scene.to_toml(path)?.as_bytes())?;
+    }
     if let Some(path) = &args.stats_json {
-        let json = serde_json::to_string_pretty(&out.stats).context("stats to JSON")?;
+        let json = sensorlight::output::json_text(&out.stats).context("stats to JSON")?;
         files.stage_bytes(path, json.as_bytes())?;
     }
     files.commit()?;
-    for path in [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref()].into_iter().flatten() {
-        eprintln!("wrote {}", path.display());
+    if say::normal() {
+        let written = [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref(), args.write_scene.as_ref()];
+        for path in written.into_iter().flatten() {
+            eprintln!("wrote {}", path.display());
+        }
     }
     Ok(())
 }

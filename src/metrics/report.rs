@@ -64,7 +64,7 @@ pub fn write(dir: &Path, header: &Header<'_>, runs: &[Run]) -> Result<Vec<PathBu
         header: &'a Header<'a>,
         runs: &'a [Run],
     }
-    out.text("metrics.json", &serde_json::to_string_pretty(&Everything { header, runs })?)?;
+    out.text("metrics.json", &crate::output::json_text(&Everything { header, runs })?)?;
     Ok(out.written)
 }
 

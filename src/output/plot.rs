@@ -25,9 +25,21 @@ pub struct Chart<'a> {
     pub series: Vec<Series>,
 }
 
-/// An axis label: whole numbers from 100 up, the value as it is below.
+/// An axis label: whole numbers from 100 up, below that three significant digits with trailing zeros
+/// dropped. Ticks are sums of f64 steps: printed as they are, 0.03 reads "0.030000000000000002" and does
+/// not fit the label area.
 fn tick(v: &f64) -> String {
-    if v.abs() >= 100.0 { format!("{v:.0}") } else { format!("{v}") }
+    let v = *v;
+    if !v.is_finite() || v == 0.0 {
+        return if v == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    if v.abs() >= 100.0 {
+        return format!("{v:.0}");
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let text = format!("{v:.decimals$}");
+    let text = if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.') } else { &text };
+    if text == "-0" { "0".into() } else { text.into() }
 }
 
 /// Makes the embedded DejaVu Sans plotters' "sans-serif" (once).
@@ -101,7 +113,7 @@ impl Chart<'_> {
         let (x0, x1) = pad(x0, x1, self.log_x);
         let (y0, y1) = pad(y0.min(if self.log_y { y0 } else { 0.0 }), y1, self.log_y);
         let mut builder = ChartBuilder::on(root);
-        builder.caption(self.title, ("sans-serif", 22)).margin(15).x_label_area_size(45).y_label_area_size(70);
+        builder.caption(self.title, ("sans-serif", 22)).margin(15).x_label_area_size(50).y_label_area_size(85);
         macro_rules! finish {
             ($chart:expr) => {{
                 let mut chart = $chart;
@@ -150,5 +162,45 @@ impl Chart<'_> {
             (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?),
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short_and_exact_enough() {
+        assert_eq!(tick(&0.030000000000000002), "0.03");
+        assert_eq!(tick(&(0.1 + 0.2)), "0.3");
+        assert_eq!(tick(&0.00012345), "0.000123");
+        assert_eq!(tick(&1.5), "1.5");
+        assert_eq!(tick(&2.0), "2");
+        assert_eq!(tick(&12.345), "12.3");
+        assert_eq!(tick(&1234.4), "1234");
+        assert_eq!(tick(&0.0), "0");
+        assert_eq!(tick(&-0.25), "-0.25");
+    }
+
+    #[test]
+    fn svg_axis_labels_carry_no_float_noise() {
+        let points = (0..8).map(|i| (i as f64, 0.01 * i as f64)).collect();
+        let chart = Chart {
+            title: "t",
+            x_label: "x",
+            y_label: "y",
+            log_x: false,
+            log_y: false,
+            series: vec![Series { name: "s".into(), points, dashed: false }],
+        };
+        let svg = chart.svg().unwrap();
+        let labels: Vec<&str> = svg
+            .split('>')
+            .filter_map(|t| t.split('<').next())
+            .map(str::trim)
+            .filter(|t| t.parse::<f64>().is_ok())
+            .collect();
+        assert!(labels.iter().any(|l| l.starts_with("0.0")), "fractional ticks: {labels:?}");
+        assert!(labels.iter().all(|l| l.len() <= 6), "no label carries float noise: {labels:?}");
     }
 }

@@ -44,12 +44,56 @@ use crate::sensors::refine::{Refinement, Visibility};
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
 
-/// Progress callbacks for long renders.
+/// The steps of a render (docs/DESIGN.md §3), for progress displays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// The G-buffer pass and its read-back.
+    GBuffer,
+    /// Rounds of sensing and refinement.
+    Sensing,
+    /// Interpolation, filter, composition and the read-back of the image.
+    Post,
+}
+
+/// A refinement round, judged: how much of the image is final. The total work of a render is not known up
+/// front (each round decides the next), but pixels resolved (by sensing or interpolation) only grow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RoundDone {
+    /// 1-based.
+    pub round: u32,
+    /// Sensors the round rendered.
+    pub sensors: u64,
+    /// Pixels whose value is decided, of `pixels`.
+    pub resolved_pixels: u64,
+    pub pixels: u64,
+}
+
+/// The render so far, after a round's sensors are done: for previews.
+pub struct Snapshot {
+    /// 1-based.
+    pub round: u32,
+    pub size: ImageSize,
+    /// `Le + albedo·R` with R interpolated over every quad, judged or not, and not filtered.
+    pub image: Vec<Vec4>,
+}
+
+/// Progress callbacks for long renders. Every method does nothing by default.
 pub trait Progress {
-    /// `n` more sensors will be rendered.
+    /// A step of the render begins.
+    fn phase(&self, _phase: Phase) {}
+    /// `n` more sensors will be rendered (once per round).
     fn queued(&self, _n: u64) {}
     /// `n` more sensors are done.
     fn done(&self, _n: u64) {}
+    /// A round's results were judged.
+    fn round(&self, _round: &RoundDone) {}
+    /// Whether [`Progress::snapshot`] should see round `round` (1-based): building one costs a pass over the
+    /// image on the host.
+    fn wants_snapshot(&self, _round: u32) -> bool {
+        false
+    }
+    /// The image after a round, when [`Progress::wants_snapshot`] said so.
+    fn snapshot(&self, _snapshot: &Snapshot) {}
 }
 
 /// No progress reporting.
@@ -161,12 +205,15 @@ impl<'a> RendererBuilder<'a> {
         let cache = cache.unwrap_or(&mut own_cache);
         let mut ignore = |_| ();
         let events = events.unwrap_or(&mut ignore);
+        let started = Instant::now();
         let choice = {
             let mut prober = probe::ProbeRenderer::new(device, &config, budget);
             let (sensor, rd) = (config.sensor, config.sensor_size);
             strategy::choose(&mut prober, sensor, config.estimator, rd, budget, config.strategy, cache, events)?
         };
-        Renderer::new(device, scene, config, choice)
+        let mut renderer = Renderer::new(device, scene, config, choice)?;
+        renderer.choice_time = started.elapsed();
+        Ok(renderer)
     }
 
     /// Builds the renderer with `kind`, without its self-check: for the self-check itself, and for tests
@@ -264,6 +311,9 @@ pub struct Renderer {
     scale: f32,
     config: RendererConfig,
     choice: Choice,
+    /// How long building took: the strategy's self-checks and measurement (near nothing when cached), then
+    /// pipelines and buffers. Not part of any render's own time.
+    choice_time: Duration,
     device: Arc<Device>,
 }
 
@@ -331,6 +381,7 @@ impl Renderer {
             scale,
             config,
             choice,
+            choice_time: Duration::ZERO,
             device: device.clone(),
         })
     }
@@ -342,6 +393,12 @@ impl Renderer {
     /// How the strategy was chosen.
     pub fn choice(&self) -> &Choice {
         &self.choice
+    }
+
+    /// How long [`RendererBuilder::build`] took: choosing the strategy, then creating pipelines (zero for
+    /// [`RendererBuilder::build_unchecked`]).
+    pub fn build_time(&self) -> Duration {
+        self.choice_time
     }
 
     pub fn config(&self) -> &RendererConfig {
@@ -394,6 +451,7 @@ impl Renderer {
         let device = self.device.clone();
         let pixels = size.width as usize * size.height as usize;
 
+        progress.phase(Phase::GBuffer);
         let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
         let targets = Targets {
             gbuffer: gpu_gbuffer,
@@ -415,6 +473,7 @@ impl Renderer {
 
         // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G). The
         // host keeps R only where it sensed: that is all the refinement reads.
+        progress.phase(Phase::Sensing);
         let sensing_start = Instant::now();
         let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
         let (refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
@@ -451,6 +510,10 @@ impl Renderer {
                 self.runner.drain(&mut deliver)?;
                 per_round.push(pending.len() as u64);
                 readback_per_round.push(self.runner.times.readback_bytes - read_before);
+                let round = per_round.len() as u32;
+                if progress.wants_snapshot(round) {
+                    progress.snapshot(&Snapshot { round, size, image: preview(&g, &r, &refinement) });
+                }
             }
             if refinement.is_finished() {
                 break;
@@ -458,10 +521,17 @@ impl Renderer {
             let t = Instant::now();
             pending = refinement.step(&r, &visibility);
             refine_time += t.elapsed();
+            progress.round(&RoundDone {
+                round: per_round.len() as u32,
+                sensors: per_round.last().copied().unwrap_or(0),
+                resolved_pixels: pixels as u64 - refinement.unresolved_pixels(),
+                pixels: pixels as u64,
+            });
         }
         let sensing_time = sensing_start.elapsed();
 
         // Interpolation, filter, composition: one submission.
+        progress.phase(Phase::Post);
         let post_start = Instant::now();
         self.interpolate.bind(&device, refinement.interpolated(), &targets.radiance)?;
         let filter_inputs = (&targets.gbuffer.surface, &targets.light_masks);
@@ -497,6 +567,19 @@ impl Renderer {
         );
         Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
     }
+}
+
+/// The image so far on the host, from the R sensed (`r`, where `refinement` sensed) interpolated over every
+/// quad: unfiltered, cheap, and only ever a preview (the render's own image comes from the GPU passes).
+fn preview(g: &GBufferData, r: &[Vec4], refinement: &Refinement) -> Vec<Vec4> {
+    use crate::gpu_types::radiance_state::SENSED;
+    let mut radiance: Vec<Vec4> = (r.iter().enumerate())
+        .map(|(i, v)| if refinement.is_sensed(i) { v.truncate().extend(SENSED) } else { Vec4::ZERO })
+        .collect();
+    crate::sensors::refine::interpolate_cpu(&mut radiance, g.size.width, &refinement.coverage());
+    (g.emission.iter().zip(&g.albedo).zip(&radiance))
+        .map(|((le, kd), r)| (le.truncate() + kd.truncate() * r.truncate()).extend(1.0))
+        .collect()
 }
 
 /// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.

@@ -35,6 +35,10 @@ pub struct RenderStats {
     pub in_flight: u32,
     /// Wall time of the whole render.
     pub total_seconds: f64,
+    /// Wall time building the renderer took before it: the strategy's self-checks and `auto`'s measurement
+    /// (near nothing when cached), pipelines. Not in `total_seconds`, which is the render's own (the paper's
+    /// sensor time); a renderer serving several renders reports it with each.
+    pub build_seconds: f64,
     pub times: RenderTimes,
     /// The paper's metric: total time / sensors, in milliseconds.
     pub sensor_time_ms: f64,
@@ -122,6 +126,7 @@ impl RenderStats {
             batches: renderer.runner.times.batches,
             in_flight: renderer.runner.in_flight(),
             total_seconds: total,
+            build_seconds: renderer.build_time().as_secs_f64(),
             times,
             sensor_time_ms: if sensors > 0 { 1e3 * total / sensors as f64 } else { 0.0 },
         }

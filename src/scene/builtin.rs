@@ -26,7 +26,16 @@ pub fn from_groups(
     let mut warnings = Vec::new();
     let mesh = Mesh::new(&groups, materials, &mut warnings).expect("built-in scenes have triangles");
     let render = toml::Table::new();
-    Scene { path: "(built in)".into(), mesh, camera, image: size, render, warnings, inputs: Vec::new() }
+    Scene {
+        path: "(built in)".into(),
+        mesh,
+        camera,
+        image: size,
+        render,
+        warnings,
+        inputs: Vec::new(),
+        mesh_file: None,
+    }
 }
 
 /// A room open towards the camera, 2 × 2 × 2 units, with a red and a green wall, a large ceiling light

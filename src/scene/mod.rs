@@ -1,10 +1,12 @@
 //! Scenes: triangles with materials and surface ids, a camera and an image size. Everything downstream (the
 //! GPU passes, the CPU reference) is handed a [`Scene`], never a parser.
 
+pub mod auto_camera;
 pub mod builtin;
 pub mod bvh;
 pub mod camera;
 pub mod file;
+pub mod kind;
 pub mod obj;
 pub mod ray;
 pub mod surfaces;
@@ -15,6 +17,7 @@ use anyhow::{Context as _, Result, bail, ensure};
 use glam::Vec3;
 
 pub use camera::Camera;
+pub use kind::FileKind;
 pub use obj::Material;
 pub use ray::Ray;
 
@@ -122,12 +125,8 @@ impl Mesh {
         used.sort_unstable();
         used.dedup();
         let mut warnings = Vec::new();
-        if !used.iter().any(|&m| self.materials[m].is_emitter()) {
-            warnings.push(
-                "no surface emits light (no material in use has Ke > 0): the image shows only Kd·ε and the \
-                 background, and is black at ε = 0 with a black background"
-                    .to_owned(),
-            );
+        if !self.emits_light() {
+            warnings.push(Self::NO_EMITTER.to_owned());
         }
         for m in used.iter().map(|&m| &self.materials[m]) {
             if m.kd.max_element() > 1.0 {
@@ -143,6 +142,15 @@ impl Mesh {
     /// The largest `Ke` component of the materials in use (0 without emitters).
     pub fn brightest_emission(&self) -> f32 {
         self.surfaces.iter().map(|s| self.materials[s.material].ke.max_element()).fold(0.0, f32::max)
+    }
+
+    /// The warning [`Mesh::lighting_warnings`] gives when no surface emits.
+    pub const NO_EMITTER: &str = "no surface emits light (no material in use has Ke > 0): the image shows only \
+                                  Kd·ε and the background, and is black at ε = 0 with a black background";
+
+    /// Whether a material in use emits light.
+    pub fn emits_light(&self) -> bool {
+        self.surfaces.iter().any(|s| self.materials[s.material].is_emitter())
     }
 
     pub fn material_of(&self, surface: SurfaceId) -> &Material {
@@ -175,6 +183,8 @@ pub struct Scene {
     /// The files it was read from: the scene file, the mesh, its material libraries (none when built in).
     /// Outputs must not overwrite them.
     pub inputs: Vec<PathBuf>,
+    /// The OBJ file the mesh came from (none when built in).
+    pub mesh_file: Option<PathBuf>,
 }
 
 impl Scene {
@@ -183,8 +193,13 @@ impl Scene {
         self.inputs.iter().map(PathBuf::as_path).collect()
     }
 
-    /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line.
+    /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line; a file
+    /// of another kind (a mesh, an image) is named as such.
     pub fn load(path: &Path) -> Result<Self> {
+        match FileKind::of(path) {
+            FileKind::Scene => {}
+            kind => bail!("{} is {}, not a scene file (TOML)", path.display(), kind.describe()),
+        }
         let file = file::SceneFile::read(path)?;
         let c = &file.camera;
         let camera = Camera::look_at(c.eye.into(), c.target.into(), c.up.into(), c.vfov_deg)
@@ -203,6 +218,61 @@ impl Scene {
         warnings.extend(mesh.lighting_warnings());
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings, inputs })
+        let mesh_file = Some(mesh_path);
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings, inputs, mesh_file })
+    }
+}
+
+impl Scene {
+    /// A scene of the OBJ mesh at `path` alone: the camera frames it ([`auto_camera`]), the image is `image`,
+    /// and the `[render]` table is empty (the defaults).
+    pub fn from_mesh(path: &Path, image: ImageSize) -> Result<Self> {
+        ensure!(image.width >= 1 && image.height >= 1, "image width and height must be at least 1");
+        let obj = obj::load(path)?;
+        let mut warnings = obj.warnings;
+        let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
+        warnings.extend(mesh.lighting_warnings());
+        let camera = auto_camera::frame(&mesh.bounds, image).with_context(|| format!("{}: camera", path.display()))?;
+        let render = toml::Table::new();
+        let mesh_file = Some(path.to_owned());
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render, warnings, inputs: obj.files, mesh_file })
+    }
+
+    /// This scene as a TOML scene file to be written at `toml_path`: the mesh relative to that file's
+    /// directory where it lies below it (else absolute), the camera, the image size and the `[render]` table.
+    pub fn to_toml(&self, toml_path: &Path) -> Result<String> {
+        let Some(mesh_path) = &self.mesh_file else { bail!("a built-in scene has no mesh file to name") };
+        let dir = toml_path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let mesh = std::fs::canonicalize(mesh_path).with_context(|| mesh_path.display().to_string())?;
+        let mesh = match std::fs::canonicalize(dir) {
+            Ok(dir) => mesh.strip_prefix(&dir).map(Path::to_owned).unwrap_or(mesh),
+            Err(_) => mesh,
+        };
+        let c = &self.camera;
+        // f32 → f64 by the shortest text that reads back as the f32: 0.1, not 0.10000000149011612.
+        let num = |v: f32| toml::Value::Float(v.to_string().parse().unwrap_or(v as f64));
+        let vec = |v: Vec3| toml::Value::Array(v.to_array().map(num).to_vec());
+        let mut camera = toml::Table::new();
+        camera.insert("eye".into(), vec(c.eye));
+        camera.insert("target".into(), vec(c.eye + c.forward * (self.mesh.bounds.center() - c.eye).length()));
+        camera.insert("up".into(), vec(c.up));
+        // Degrees → radians → degrees drifts in the last bit (40 → 40.000004): four decimals are plenty.
+        camera.insert("vfov_deg".into(), num((c.vfov.to_degrees() * 1e4).round() / 1e4));
+        let mut image = toml::Table::new();
+        image.insert("width".into(), toml::Value::Integer(self.image.width.into()));
+        image.insert("height".into(), toml::Value::Integer(self.image.height.into()));
+        let mut doc = toml::Table::new();
+        let mesh = mesh.to_str().with_context(|| format!("{}: not UTF-8", mesh.display()))?;
+        doc.insert("mesh".into(), toml::Value::String(mesh.to_owned()));
+        doc.insert("camera".into(), toml::Value::Table(camera));
+        doc.insert("image".into(), toml::Value::Table(image));
+        if !self.render.is_empty() {
+            doc.insert("render".into(), toml::Value::Table(self.render.clone()));
+        }
+        let body = toml::to_string(&doc).context("scene to TOML")?;
+        Ok(format!(
+            "# A scene for {}, written by sensorlight: edit freely (see README.md, Scenes).\n{body}",
+            self.path.display()
+        ))
     }
 }

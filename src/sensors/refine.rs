@@ -214,6 +214,21 @@ impl Refinement {
         &self.interpolated
     }
 
+    /// Pixels not final yet: those the quads still to be judged own. It only falls, round by round (children
+    /// own exactly their parent's pixels), and is 0 once finished: an honest measure of progress.
+    pub fn unresolved_pixels(&self) -> u64 {
+        let area =
+            |q: &GpuQuad| (q.own_x1 + 1).saturating_sub(q.x0) as u64 * (q.own_y1 + 1).saturating_sub(q.y0) as u64;
+        self.active.iter().map(|&q| area(&self.owned(q))).sum()
+    }
+
+    /// The quads accepted for interpolation and those still to be judged, each with its own pixels. Once a
+    /// round's sensors are done every corner of each is sensed, so interpolating them all fills the image: a
+    /// preview of the render so far (the final image interpolates only [`Refinement::interpolated`]).
+    pub fn coverage(&self) -> Vec<GpuQuad> {
+        self.interpolated.iter().copied().chain(self.active.iter().map(|&q| self.owned(q))).collect()
+    }
+
     /// No quad is left to judge.
     pub fn is_finished(&self) -> bool {
         self.active.is_empty()

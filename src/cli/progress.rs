@@ -1,0 +1,301 @@
+//! One progress display for a whole render: the strategy choice, the G-buffer, every refinement round and
+//! the post passes. A render's total work is not known up front (each round decides the next), so the
+//! measure is the share of pixels resolved, by sensing or by interpolation: it only grows, round by round,
+//! and the bar never refills. Within a round it shows the round's sensors done and the sensing rate.
+//!
+//! On a terminal: a bar on standard error. Elsewhere (a log): a plain line every tenth of the pixels
+//! resolved or every [`LINE_EVERY`], whichever comes first. Nothing with `-q`.
+//!
+//! Once the first round's size and a cost per sensor are known (the strategy probe's measurement, else the
+//! first sensors'), a run expected to take longer than [`ESTIMATE_ABOVE`] says so.
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::sync::mpsc::{self, RecvTimeoutError, Sender};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use sensorlight::output::png;
+use sensorlight::renderer::{Phase, Progress, RoundDone, Snapshot};
+
+use super::say;
+
+/// Rhythm of the plain lines when the pixels resolved do not move.
+pub const LINE_EVERY: Duration = Duration::from_secs(5);
+/// Runs expected to take longer than this are announced with their estimate.
+pub const ESTIMATE_ABOVE: Duration = Duration::from_secs(10);
+/// Sensors of a whole render over those of its first grid, on the shipped scenes with their defaults
+/// (tile 16): door-ajar 35, small-light 42, cornell 67, cornell-mcguire 69, room 108. The refinement decides
+/// the real count, so the estimate is said as this range, centred on [`SENSORS_TYPICAL`].
+pub const SENSORS_OVER_FIRST_GRID: (f64, f64) = (35.0, 110.0);
+pub const SENSORS_TYPICAL: f64 = 60.0;
+
+/// Where a render's previews go: `path` rewritten after every `every` rounds.
+pub struct Preview {
+    pub every: u32,
+    pub path: PathBuf,
+    pub exposure: f32,
+}
+
+pub struct RenderProgress {
+    shared: Arc<Shared>,
+    ticker: Option<(Sender<()>, JoinHandle<()>)>,
+    preview: Option<Preview>,
+}
+
+struct Shared {
+    bar: Option<ProgressBar>,
+    lines: bool,
+    start: Instant,
+    state: Mutex<State>,
+}
+
+#[derive(Default)]
+struct State {
+    phase: &'static str,
+    pixels: u64,
+    resolved: u64,
+    round: u32,
+    round_queued: u64,
+    round_done: u64,
+    sensors_done: u64,
+    sensing_start: Option<Instant>,
+    last_line: Option<Instant>,
+    /// Tenths of the pixels resolved already reported by a plain line.
+    tenths_said: u64,
+    /// The strategy probe's time per sensor, when it measured one this run.
+    probe_per_sensor: Option<Duration>,
+    first_grid: Option<u64>,
+    /// When the first batch was done, and the sensors done then.
+    first_batch: Option<(Instant, u64)>,
+    estimated: bool,
+}
+
+impl RenderProgress {
+    /// A display for a render of `pixels` pixels, starting with the strategy choice.
+    pub fn new(pixels: u64, preview: Option<Preview>) -> Self {
+        let show = say::normal();
+        let terminal = std::io::stderr().is_terminal();
+        let bar = (show && terminal).then(|| {
+            let bar = ProgressBar::new(pixels.max(1));
+            let template = "{spinner} {elapsed:>4} [{bar:30}] {percent:>3}% of pixels resolved · {msg}";
+            let style = ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
+            bar.set_style(style.progress_chars("=> "));
+            bar.enable_steady_tick(Duration::from_millis(200));
+            bar
+        });
+        let lines = show && !terminal;
+        let state = State { phase: "choosing the batching strategy", pixels, ..State::default() };
+        let shared = Arc::new(Shared { bar, lines, start: Instant::now(), state: Mutex::new(state) });
+        shared.update(false);
+        let ticker = lines.then(|| {
+            let (stop, stopped) = mpsc::channel::<()>();
+            let shared = shared.clone();
+            let handle = std::thread::spawn(move || {
+                while let Err(RecvTimeoutError::Timeout) = stopped.recv_timeout(LINE_EVERY) {
+                    shared.update(false);
+                }
+            });
+            (stop, handle)
+        });
+        Self { shared, ticker, preview }
+    }
+
+    /// Prints `text` above the bar (or as a line), when not `-q`.
+    pub fn say(&self, text: &str) {
+        if !say::normal() {
+            return;
+        }
+        match &self.shared.bar {
+            Some(bar) => bar.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+
+    /// The strategy probe measured `per_sensor` for the strategy chosen (at the render's sensor size).
+    pub fn probe_measured(&self, per_sensor: Duration) {
+        self.shared.lock().probe_per_sensor = Some(per_sensor);
+    }
+
+    /// Ends the display, leaving nothing of the bar on the terminal.
+    pub fn finish(mut self) {
+        self.stop();
+    }
+
+    fn stop(&mut self) {
+        if let Some((stop, handle)) = self.ticker.take() {
+            drop(stop);
+            let _ = handle.join();
+        }
+        if let Some(bar) = &self.shared.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+impl Drop for RenderProgress {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+impl Shared {
+    fn lock(&self) -> std::sync::MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Refreshes the bar; on a log, writes a line if a tenth of the pixels was crossed, `force`d, or the
+    /// last line is [`LINE_EVERY`] old.
+    fn update(&self, force: bool) {
+        let mut s = self.lock();
+        let rate = s.sensing_start.map(|t| s.sensors_done as f64 / t.elapsed().as_secs_f64().max(1e-3));
+        let mut what = s.phase.to_owned();
+        if s.round > 0 && s.phase == "sensing" {
+            what = format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued);
+        }
+        if let Some(rate) = rate.filter(|_| s.sensors_done > 0) {
+            what += &format!(", {rate:.0} sensors/s");
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_position(s.resolved);
+            bar.set_message(what);
+            return;
+        }
+        if !self.lines {
+            return;
+        }
+        let tenths = (10 * s.resolved).checked_div(s.pixels).unwrap_or(0);
+        let due = s.last_line.is_none_or(|t| t.elapsed() >= LINE_EVERY);
+        if force || tenths > s.tenths_said || due {
+            let percent = if s.pixels > 0 { 100.0 * s.resolved as f64 / s.pixels as f64 } else { 0.0 };
+            eprintln!("[{:6.1} s] {percent:3.0} % of pixels resolved; {what}", self.start.elapsed().as_secs_f64());
+            s.tenths_said = tenths;
+            s.last_line = Some(Instant::now());
+        }
+    }
+
+    /// Says once how long the render should take, when that is long: expected sensors (the first grid's
+    /// times [`SENSORS_OVER_FIRST_GRID`]) at the measured cost per sensor.
+    fn estimate(&self) -> Option<String> {
+        let mut s = self.lock();
+        let first = s.first_grid?;
+        if s.estimated {
+            return None;
+        }
+        let (per_sensor, source) = match (s.probe_per_sensor, s.first_batch) {
+            (Some(t), _) => (t.as_secs_f64(), "measured by the strategy probe"),
+            // The rate over a second of sensing after the first batch (which also pays for pipelines warming
+            // up and the light hints).
+            (None, Some((t, n))) if t.elapsed() >= Duration::from_secs(1) && s.sensors_done > n => {
+                (t.elapsed().as_secs_f64() / (s.sensors_done - n) as f64, "measured on the first sensors")
+            }
+            _ => return None,
+        };
+        s.estimated = true;
+        let seconds = |ratio: f64| first as f64 * ratio * per_sensor;
+        let (low, high) = SENSORS_OVER_FIRST_GRID;
+        (seconds(SENSORS_TYPICAL) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
+            format!(
+                "estimate: {} to {} (~{:.0} sensors: the first grid's {first} × {low}–{high}, the shipped scenes' \
+                 range) at {:.2} ms a sensor ({source})",
+                duration(seconds(low)),
+                duration(seconds(high)),
+                first as f64 * SENSORS_TYPICAL,
+                per_sensor * 1e3,
+            )
+        })
+    }
+}
+
+/// `42 s`, `3 min 20 s`.
+fn duration(seconds: f64) -> String {
+    if seconds < 60.0 {
+        format!("{seconds:.0} s")
+    } else {
+        format!("{:.0} min {:.0} s", (seconds / 60.0).floor(), seconds % 60.0)
+    }
+}
+
+impl Progress for RenderProgress {
+    fn phase(&self, phase: Phase) {
+        {
+            let mut s = self.shared.lock();
+            s.phase = match phase {
+                Phase::GBuffer => "G-buffer",
+                Phase::Sensing => "sensing",
+                Phase::Post => "interpolation, filter, composition",
+            };
+            if phase == Phase::Sensing {
+                s.sensing_start = Some(Instant::now());
+            }
+        }
+        self.shared.update(false);
+    }
+
+    fn queued(&self, n: u64) {
+        {
+            let mut s = self.shared.lock();
+            s.round += 1;
+            (s.round_queued, s.round_done) = (n, 0);
+            s.first_grid.get_or_insert(n);
+        }
+        if let Some(text) = self.shared.estimate() {
+            self.say(&text);
+        }
+        self.shared.update(false);
+    }
+
+    fn done(&self, n: u64) {
+        {
+            let mut s = self.shared.lock();
+            s.round_done += n;
+            s.sensors_done += n;
+            let done = s.sensors_done;
+            s.first_batch.get_or_insert((Instant::now(), done));
+        }
+        if let Some(text) = self.shared.estimate() {
+            self.say(&text);
+        }
+        self.shared.update(false);
+    }
+
+    fn round(&self, round: &RoundDone) {
+        self.shared.lock().resolved = round.resolved_pixels;
+        if say::verbose() {
+            let percent = 100.0 * round.resolved_pixels as f64 / round.pixels.max(1) as f64;
+            self.say(&format!("round {}: {} sensors; {percent:.1} % of pixels resolved", round.round, round.sensors));
+        }
+        self.shared.update(false);
+    }
+
+    fn wants_snapshot(&self, round: u32) -> bool {
+        self.preview.as_ref().is_some_and(|p| round.is_multiple_of(p.every))
+    }
+
+    fn snapshot(&self, snapshot: &Snapshot) {
+        let Some(preview) = &self.preview else { return };
+        let size = snapshot.size;
+        // A preview that cannot be written costs the render nothing: said, not fatal.
+        match png::write(&preview.path, size.width, size.height, &snapshot.image, preview.exposure) {
+            Ok(()) if say::verbose() => {
+                self.say(&format!("preview after round {}: {}", snapshot.round, preview.path.display()))
+            }
+            Ok(()) => {}
+            Err(e) => self.say(&format!("warning: preview {}: {e:#}", preview.path.display())),
+        }
+    }
+}
+
+impl RenderProgress {
+    /// The render is over: every pixel resolved.
+    pub fn complete(&self) {
+        {
+            let mut s = self.shared.lock();
+            s.resolved = s.pixels;
+            s.phase = "done";
+        }
+        self.shared.update(true);
+    }
+}
