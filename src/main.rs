@@ -15,7 +15,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", sensorlight::errors::message(&e));
+            sensorlight::errln!("error: {}", sensorlight::errors::message(&e));
             ExitCode::FAILURE
         }
     }

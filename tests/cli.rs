@@ -402,3 +402,22 @@ fn reference_honours_the_scenes_exposure() {
     assert_eq!(from_scene, png(plain, "b", &["--exposure", "1"]), "the scene's exposure = the flag's");
     assert_ne!(from_scene, png(plain, "c", &[]), "exposure changes the PNG");
 }
+
+/// Diagnostics are best effort: with standard error closed a render still runs and writes its outputs
+/// (it used to panic on its first message, exit 101, and write nothing); a failure still exits non-zero.
+#[test]
+fn a_closed_stderr_does_not_stop_a_render() {
+    let dir = common::scratch("closed_stderr");
+    let out = dir.join("out.exr");
+    let run = |extra: &[&str]| {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let scene = common::project("scenes/cornell/cornell.toml");
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "8"];
+        args.extend_from_slice(extra);
+        common::command().args(&args).stderr(writer).status().unwrap()
+    };
+    assert_eq!(run(&["--height", "8"]).code(), Some(0));
+    assert!(out.exists() && out.with_extension("png").exists());
+    assert_eq!(run(&["--height", "0"]).code(), Some(1), "an error is still an exit code");
+}

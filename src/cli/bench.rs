@@ -81,9 +81,8 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
         let report = bench::run(device, &config, &mut |event| match event {
             BenchEvent::Round { .. } => bar.inc(1),
-            BenchEvent::Checked { strategy, result } if super::say::verbose() => {
-                bar.suspend(|| eprintln!("self-check {strategy}: max difference {:.2e}", result.max_difference))
-            }
+            BenchEvent::Checked { strategy, result } if super::say::verbose() => bar
+                .suspend(|| sensorlight::errln!("self-check {strategy}: max difference {:.2e}", result.max_difference)),
             BenchEvent::Checked { .. } => {}
         })?;
         bar.finish_and_clear();

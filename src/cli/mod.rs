@@ -4,7 +4,7 @@
 macro_rules! say {
     ($($arg:tt)*) => {
         if $crate::cli::say::normal() {
-            eprintln!($($arg)*);
+            sensorlight::errln!($($arg)*);
         }
     };
 }
@@ -98,7 +98,7 @@ fn load_scene_file(path: &Path) -> Result<Scene> {
 fn warn_all(warnings: &[String]) {
     if say::normal() {
         for warning in warnings {
-            eprintln!("warning: {warning}");
+            sensorlight::errln!("warning: {warning}");
         }
     }
 }
@@ -140,7 +140,7 @@ fn load_input(
                 let white = toml::Value::Array(vec![toml::Value::Float(1.0); 3]);
                 scene.render.insert("background".into(), white);
                 if say::normal() && flags.background.is_none() {
-                    eprintln!(
+                    sensorlight::errln!(
                         "note: nothing in {} emits light: it is lit by a white sky (--background 1,1,1; the flag \
                          changes it)",
                         path.display()
@@ -186,7 +186,7 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
         None => Device::new(&options)?,
     };
     if say::verbose() {
-        eprintln!("device: {}", device.adapter);
+        sensorlight::errln!("device: {}", device.adapter);
     }
     let log = device.validation_log().clone();
     let result = work(&device);
@@ -194,7 +194,7 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
     result?;
     let messages = log.messages();
     if !messages.is_empty() {
-        eprintln!("error: the validation layer reported {} message(s)", messages.len());
+        sensorlight::errln!("error: the validation layer reported {} message(s)", messages.len());
         return Ok(ExitCode::from(EXIT_VALIDATION));
     }
     Ok(ExitCode::SUCCESS)

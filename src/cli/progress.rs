@@ -110,7 +110,7 @@ impl RenderProgress {
         }
         match &self.shared.bar {
             Some(bar) => bar.println(text),
-            None => eprintln!("{text}"),
+            None => sensorlight::errln!("{text}"),
         }
     }
 
@@ -170,7 +170,10 @@ impl Shared {
         let due = s.last_line.is_none_or(|t| t.elapsed() >= LINE_EVERY);
         if force || tenths > s.tenths_said || due {
             let percent = if s.pixels > 0 { 100.0 * s.resolved as f64 / s.pixels as f64 } else { 0.0 };
-            eprintln!("[{:6.1} s] {percent:3.0} % of pixels resolved; {what}", self.start.elapsed().as_secs_f64());
+            sensorlight::errln!(
+                "[{:6.1} s] {percent:3.0} % of pixels resolved; {what}",
+                self.start.elapsed().as_secs_f64()
+            );
             s.tenths_said = tenths;
             s.last_line = Some(Instant::now());
         }

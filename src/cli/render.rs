@@ -150,7 +150,7 @@ fn print_stats(s: &RenderStats, wall: Duration) {
     if !say::normal() {
         return;
     }
-    eprintln!(
+    sensorlight::errln!(
         "rendered in {:.2} s (strategy choice and setup {:.2} s + render {:.2} s): {} sensors, sensor time {:.4} ms; \
          strategy {}, {}",
         wall.as_secs_f64(),
@@ -169,7 +169,7 @@ fn print_stats(s: &RenderStats, wall: Duration) {
 fn print_details(s: &RenderStats) {
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
     let read_back: u64 = s.readback_bytes_per_round.iter().sum();
-    eprintln!(
+    sensorlight::errln!(
         "{} sensors ({}, rd {}, {}) in {} batches of up to {}, {} in flight; per refinement round: {}; {} quads \
          interpolated; {:.1} KiB read back",
         s.sensors,
@@ -188,7 +188,7 @@ fn print_details(s: &RenderStats) {
         (Some(maps), Some(reduction)) => format!("GPU {maps:.2} s sensor maps + {reduction:.2} s reduction"),
         _ => "no GPU timestamps".into(),
     };
-    eprintln!(
+    sensorlight::errln!(
         "{:.2} s total, sensor time {:.4} ms (total / sensors): G-buffer {:.2} s, sensing {:.2} s (host: record \
          {:.2} s, wait {:.2} s, refine {:.2} s; {gpu}), post {:.2} s; {}",
         s.total_seconds,
@@ -233,7 +233,7 @@ fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &
     if say::normal() {
         let written = [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref(), args.write_scene.as_ref()];
         for path in written.into_iter().flatten() {
-            eprintln!("wrote {}", path.display());
+            sensorlight::errln!("wrote {}", path.display());
         }
     }
     Ok(())

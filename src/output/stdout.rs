@@ -1,4 +1,4 @@
-//! Results printed on standard output. A reader that stops reading (`sensorlight devices | head -1`) is not
+//! Results printed on standard output, and diagnostics on standard error. A reader that stops reading (`sensorlight devices | head -1`) is not
 //! a failure of ours: a write to the closed pipe returns [`StdoutClosed`], which ends the program quietly with
 //! exit code 0, as if all had been read (the main function checks with [`is_closed`]). Any other error
 //! writing standard output (a full disk behind `>`) is an error like any other.
@@ -31,5 +31,20 @@ pub fn is_closed(error: &anyhow::Error) -> bool {
 macro_rules! outln {
     ($($arg:tt)*) => {
         $crate::output::stdout::line(format_args!($($arg)*))
+    };
+}
+
+/// Writes one line of diagnostics to standard error. They are best effort: with standard error closed
+/// (`sensorlight render … 2>&1 | head -1`) the work goes on and its outputs are written; `eprintln!` would
+/// panic instead.
+pub fn diagnostic(args: std::fmt::Arguments<'_>) {
+    let _ = writeln!(std::io::stderr().lock(), "{args}");
+}
+
+/// `eprintln!` that never panics: see [`diagnostic`].
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::output::stdout::diagnostic(format_args!($($arg)*))
     };
 }
