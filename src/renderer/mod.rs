@@ -61,8 +61,10 @@ pub const DEFAULT_IN_FLIGHT: u32 = 2;
 
 /// Meshes of at least this many triangles are drawn into the sensor maps from their clusters, culled and
 /// at the level of detail each view needs ([`Detail::Auto`]); smaller ones at full detail, bit for bit as
-/// before. Where the two cost the same per sensor on lavapipe (docs/BENCHMARKS.md "Large meshes").
-pub const CLUSTER_MIN_TRIANGLES: usize = 20_000;
+/// before (every shipped scene has under 300). On lavapipe the two cost the same per sensor at a few hundred
+/// triangles and clusters are 9× faster at 2 000 (docs/BENCHMARKS.md "Large meshes"); a GPU draws small
+/// meshes cheaper, hence the margin.
+pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
 
 /// How finely the sensor maps draw the scene (docs/DESIGN.md §9). The camera's G-buffer and the emitters
 /// are always full detail.
