@@ -13,6 +13,7 @@ layout(std430, set = 0, binding = 0) readonly buffer Clusters { GpuCluster clust
 layout(std430, set = 0, binding = 1) readonly buffer Views { GpuSensorView views[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Sensors { GpuSensor sensors[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Commands { GpuDrawCommand commands[]; };
+// counts[v]: the draws of view v; counts[views + v]: their triangles (statistics and tests).
 layout(std430, set = 0, binding = 4) buffer Counts { uint counts[]; };
 layout(push_constant) uniform Push { CullPush push; };
 
@@ -57,6 +58,7 @@ void main() {
     keep = keep && projected(k.own, k.errors.x, eye) <= tau && projected(k.parent, k.errors.y, eye) > tau;
     if (keep) {
         uint slot = atomicAdd(counts[v], 1u);
+        atomicAdd(counts[push.views + v], k.index_count / 3u);
         if (slot < push.max_per_view) {
             commands[v * push.max_per_view + slot] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
         }

@@ -2,7 +2,8 @@
 //! the same sensors at each sensor-map size; runs are repeated and interleaved (strategy after strategy,
 //! then again) so that a machine's drift hits all alike, and speed is reported as medians with their spread
 //! and as ratios measured in the same run: against `per-sensor`, and against the device's raw fill rate
-//! (full-screen triangles into the same formats, `passes::fill`).
+//! (full-screen triangles into the same formats, `passes::fill`). [`run_meshes`] is its triangle-count
+//! axis: time per sensor against mesh size, full detail against clusters.
 
 use std::sync::Arc;
 
@@ -11,7 +12,7 @@ use serde::Serialize;
 
 use crate::params::{EstimatorKind, EstimatorParams, FrameParams};
 use crate::passes::fill::FillPass;
-use crate::renderer::{self, Renderer, probe_pixels};
+use crate::renderer::{self, Detail, Renderer, probe_pixels};
 use crate::scene::{ImageSize, Scene};
 use crate::strategy::{CheckResult, StrategyKind};
 use crate::vk::Device;
@@ -246,4 +247,120 @@ impl BenchReport {
         }
         out
     }
+}
+
+/// The triangle-count axis of `sensorlight bench --scenes`: the same strategy on scenes of growing meshes,
+/// each at full detail and drawn from its clusters (docs/DESIGN.md §9), time per sensor against the first
+/// scene's (the plain one) measured in the same run.
+pub struct MeshBenchConfig {
+    /// (name, scene), the baseline first.
+    pub scenes: Vec<(String, Scene)>,
+    pub estimator_kind: EstimatorKind,
+    pub size: ImageSize,
+    pub estimator: EstimatorParams,
+    pub sizes: Vec<u32>,
+    pub strategy: StrategyKind,
+    pub sensors: usize,
+    pub repeat: usize,
+    /// Full detail only up to this many triangles (it costs time in proportion to them).
+    pub max_full_detail: usize,
+}
+
+/// One scene at one sensor size and detail.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshMeasurement {
+    pub scene: String,
+    pub triangles: usize,
+    pub rd: u32,
+    pub detail: Detail,
+    pub sensors: usize,
+    /// Seconds per run of all the sensors, each repeat.
+    pub seconds: Vec<f64>,
+    pub ms_per_sensor: f64,
+    /// Culled: triangles the maps drew per sensor, all its views.
+    pub drawn_triangles_per_sensor: Option<f64>,
+    /// Time per sensor against the first scene's at the same size and detail (full detail: the first
+    /// scene's full detail; clusters: its full detail too, the image the others are held to).
+    pub vs_first: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshReport {
+    pub device: String,
+    pub driver: String,
+    pub strategy: StrategyKind,
+    pub sensor: String,
+    pub repeat: usize,
+    pub measurements: Vec<MeshMeasurement>,
+}
+
+/// Runs the triangle-count benchmark: per size, every (scene, detail) renderer senses its own probe pixels
+/// once to warm up, then `repeat` timed rounds, interleaved.
+pub fn run_meshes(
+    device: &Arc<Device>,
+    config: &MeshBenchConfig,
+    events: &mut dyn FnMut(BenchEvent),
+) -> Result<MeshReport> {
+    let sensor = config.estimator.sensor;
+    let frame = FrameParams {
+        epsilon: config.estimator.epsilon,
+        background: config.estimator.background,
+        tile: 1,
+        dradiance: 0.0,
+        filter_radius: 0,
+    };
+    let mut measurements = Vec::new();
+    for &rd in &config.sizes {
+        let mut runs = Vec::new();
+        for (name, scene) in &config.scenes {
+            let triangles = scene.mesh.triangles.len();
+            for detail in [Detail::Full, Detail::Clusters] {
+                if detail == Detail::Full && triangles > config.max_full_detail {
+                    continue;
+                }
+                let mut r = Renderer::builder(device, scene, sensor, rd)
+                    .estimator(config.estimator_kind)
+                    .detail(detail)
+                    .build_unchecked(config.strategy)?;
+                if detail == Detail::Clusters && !r.culled() {
+                    continue; // the device cannot draw from clusters: nothing to compare
+                }
+                let pixels = probe_pixels(&r.gbuffer(config.size)?.surface, config.sensors);
+                r.sense_at(config.size, &pixels, &frame)?;
+                let drawn = r.batch_times().drawn_triangles.map(|t| t as f64 / pixels.len().max(1) as f64);
+                runs.push((name.clone(), triangles, detail, r, pixels, drawn, Vec::new()));
+            }
+        }
+        for round in 0..config.repeat {
+            for (_, _, _, r, pixels, _, seconds) in &mut runs {
+                let (_, t) = r.sense_at(config.size, pixels, &frame)?;
+                seconds.push(t.as_secs_f64());
+            }
+            events(BenchEvent::Round { rd, round: round + 1, rounds: config.repeat });
+        }
+        let per_sensor = |seconds: &[f64], n: usize| 1e3 * median(seconds) / n.max(1) as f64;
+        let baseline = runs.first().map(|(_, _, _, _, p, _, s)| per_sensor(s, p.len())).unwrap_or(f64::NAN);
+        for (scene, triangles, detail, _, pixels, drawn, seconds) in runs {
+            let ms = per_sensor(&seconds, pixels.len());
+            measurements.push(MeshMeasurement {
+                scene,
+                triangles,
+                rd,
+                detail,
+                sensors: pixels.len(),
+                seconds,
+                ms_per_sensor: ms,
+                drawn_triangles_per_sensor: drawn,
+                vs_first: ms / baseline,
+            });
+        }
+    }
+    Ok(MeshReport {
+        device: device.adapter.name.clone(),
+        driver: device.adapter.driver.clone(),
+        strategy: config.strategy,
+        sensor: sensor.to_string(),
+        repeat: config.repeat,
+        measurements,
+    })
 }

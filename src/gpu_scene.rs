@@ -1,14 +1,19 @@
 //! The scene as the GPU passes read it: a vertex buffer (triangle soup), per-triangle normals and the
 //! per-surface materials. Uploaded once per renderer and shared (hence `Arc`) by the G-buffer and sensor
-//! passes, each of which keeps what it draws with alive.
+//! passes, each of which keeps what it draws with alive. A large mesh also gets its cluster hierarchy
+//! ([`GpuClusters`], docs/DESIGN.md §9), which the sensor maps draw from after the culling pass.
 
 use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
-use crate::gpu_types::{EMITTER_CHUNK, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS, Vertex};
+use crate::clusters::{ClusterMesh, ErrorBounds, max_selected};
+use crate::gpu_types::{
+    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS,
+    Vertex,
+};
 use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene};
 use crate::vk::{Buffer, Device, transfer};
@@ -28,10 +33,77 @@ pub struct GpuScene {
     pub groups: Arc<Buffer>,
     /// The same on the host: sensors' zoom views bound the groups.
     pub lights: Lights,
+    /// The cluster hierarchy, when the scene is drawn from it.
+    pub clusters: Option<GpuClusters>,
+}
+
+/// A mesh's cluster hierarchy on the GPU: its own (welded) vertices, the triangles of every level as
+/// indices, and the clusters as the culling pass reads them.
+pub struct GpuClusters {
+    pub vertices: Arc<Buffer>,
+    pub indices: Arc<Buffer>,
+    /// `GpuCluster` each.
+    pub clusters: Arc<Buffer>,
+    pub count: u32,
+    /// No view selects more clusters than this (`clusters::max_selected`): the draw slots per view.
+    pub max_per_view: u32,
+    /// Triangles of the mesh itself (the finest level).
+    pub full_detail_triangles: u64,
+}
+
+impl GpuClusters {
+    pub fn upload(device: &Arc<Device>, mesh: &Mesh, hierarchy: &ClusterMesh) -> Result<Self> {
+        let clusters = gpu_clusters(hierarchy, |s| mesh.material_of(s).is_emitter());
+        let vertices: Vec<Vertex> = hierarchy
+            .positions
+            .iter()
+            .zip(&hierarchy.vertex_surface)
+            .map(|(&position, &surface)| Vertex { position, surface })
+            .collect();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            vertices: Arc::new(transfer::upload(
+                device,
+                "cluster vertices",
+                &vertices,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+            )?),
+            indices: Arc::new(transfer::upload(
+                device,
+                "cluster indices",
+                &hierarchy.indices,
+                vk::BufferUsageFlags::INDEX_BUFFER,
+            )?),
+            clusters: Arc::new(transfer::upload(device, "clusters", &clusters, storage)?),
+            count: clusters.len() as u32,
+            max_per_view: max_selected(hierarchy) as u32,
+            full_detail_triangles: hierarchy.full_detail_triangles() as u64,
+        })
+    }
+}
+
+/// The clusters as the culling pass reads them; `emitter(surface)` says which surfaces emit.
+pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Vec<GpuCluster> {
+    let bounds = |b: &ErrorBounds| Vec3::from(b.center).extend(b.radius);
+    clusters
+        .clusters
+        .iter()
+        .map(|k| GpuCluster {
+            sphere: Vec4::from(k.sphere),
+            own: bounds(&k.own),
+            parent: bounds(&k.parent),
+            errors: Vec4::new(k.own.error, k.parent.error, 0.0, 0.0),
+            first_index: k.first_index,
+            index_count: k.index_count,
+            flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
+            _pad: 0,
+        })
+        .collect()
 }
 
 impl GpuScene {
-    pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
+    /// The scene, drawn at full detail (the G-buffer always is), and from `hierarchy` if given.
+    pub fn upload(device: &Arc<Device>, scene: &Scene, hierarchy: Option<&ClusterMesh>) -> Result<Self> {
         let mesh = &scene.mesh;
         let vertices = vertices(mesh);
         let lights = Lights::new(mesh);
@@ -73,6 +145,7 @@ impl GpuScene {
             chunks: Arc::new(transfer::upload(device, "emitter chunks", &chunks, storage)?),
             groups: Arc::new(transfer::upload(device, "light groups", &groups, storage)?),
             lights,
+            clusters: hierarchy.map(|h| GpuClusters::upload(device, mesh, h)).transpose()?,
         })
     }
 }

@@ -118,6 +118,23 @@ fn any_selection_of_a_closed_sphere_is_watertight_and_coarser_far_away() {
 }
 
 #[test]
+fn no_selection_takes_more_clusters_than_the_bound() {
+    let c = clusters::build(&scene());
+    let bound = clusters::max_selected(&c);
+    let full = c.clusters.iter().filter(|k| k.is_full_detail()).count();
+    assert!(full <= bound && bound < c.clusters.len(), "{full} ≤ bound {bound} < {} clusters", c.clusters.len());
+    let mut most = 0;
+    for eye in [Vec3::new(0.0, 0.0, 1.05), Vec3::new(0.0, -1.4, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::splat(40.0)] {
+        for tau in [0.0, 1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 1.0, 100.0] {
+            let n = c.clusters.iter().filter(|k| selected(k, eye, 1e-4, tau)).count();
+            assert!(n <= bound, "eye {eye}, τ {tau}: {n} clusters selected, bound {bound}");
+            most = most.max(n);
+        }
+    }
+    assert_eq!(most, full, "the finest level is the largest selection here");
+}
+
+#[test]
 fn the_cache_returns_what_was_built_and_rebuilds_what_it_cannot_trust() {
     let mesh = scene();
     let dir = std::env::temp_dir().join(format!("sensorlight-clusters-{}", std::process::id()));

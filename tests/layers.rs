@@ -24,7 +24,7 @@ const RULES: &[(&str, &[&str])] = &[
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.
-    ("gpu_scene", &["vk", "scene", "gpu_types", "light"]),
+    ("gpu_scene", &["vk", "scene", "gpu_types", "light", "clusters"]),
     (
         "passes",
         &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light", "clusters"],
@@ -43,6 +43,7 @@ const RULES: &[(&str, &[&str])] = &[
             "strategy",
             "shaders",
             "light",
+            "clusters",
         ],
     ),
     // Users of the renderer.

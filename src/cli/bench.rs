@@ -1,11 +1,12 @@
-//! `sensorlight bench`: the sensor batching strategies against each other and against the raw fill rate.
+//! `sensorlight bench`: the sensor batching strategies against each other and against the raw fill rate;
+//! with `--scenes`, time per sensor against the triangle count, full detail against clusters.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Result, ensure};
 use clap::Args;
-use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport};
+use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport, MeshBenchConfig, MeshReport};
 use sensorlight::outln;
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
@@ -20,6 +21,13 @@ pub struct BenchArgs {
     /// Scene to place the sensors in [default: the built-in lightbox]
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// Triangle-count axis: scenes to compare, comma-separated, the baseline first; each is timed at full
+    /// detail and drawn from its clusters, with the first of --strategies [default: layered]
+    #[arg(long, value_delimiter = ',', conflicts_with = "scene")]
+    scenes: Vec<PathBuf>,
+    /// With --scenes: time full detail only on meshes of at most this many triangles
+    #[arg(long, default_value_t = 2_000_000, requires = "scenes")]
+    full_detail_max: usize,
     /// Sensor map sizes (rd), comma-separated
     #[arg(long, value_delimiter = ',', default_value = "32,64,128,256")]
     sizes: Vec<u32>,
@@ -60,6 +68,9 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let outputs: Vec<(&str, &std::path::Path)> =
         outputs.iter().filter_map(|(flag, path)| path.as_deref().map(|p| (*flag, p))).collect();
     atomic::check_outputs(&outputs, &args.scene.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
+    if !args.scenes.is_empty() {
+        return run_meshes(&args);
+    }
     let strategies = if args.strategies.is_empty() { StrategyKind::ALL.to_vec() } else { args.strategies.clone() };
     let size = ImageSize { width: 128, height: 128 };
     let (scene, params) = match &args.scene {
@@ -100,6 +111,72 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         files.commit()?;
         print_report(&report)
     })
+}
+
+/// `--scenes`: the triangle-count axis.
+fn run_meshes(args: &BenchArgs) -> Result<ExitCode> {
+    ensure!(args.csv.is_none() && args.plot.is_none(), "with --scenes, only --json is written");
+    if let Some(json) = &args.json {
+        atomic::check_outputs(
+            &[("--json", json.as_path())],
+            &args.scenes.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        )?;
+    }
+    let mut scenes = Vec::new();
+    let mut params = None;
+    for path in &args.scenes {
+        let (scene, p) = super::load_scene(path, &args.estimator.overrides())?;
+        params.get_or_insert(p);
+        scenes.push((path.display().to_string(), scene));
+    }
+    let params = params.expect("at least one scene");
+    let config = MeshBenchConfig {
+        scenes,
+        estimator_kind: args.estimator_kind.unwrap_or(params.estimator_kind),
+        size: ImageSize { width: 128, height: 128 },
+        estimator: params.estimator,
+        sizes: args.sizes.clone(),
+        strategy: args.strategies.first().copied().unwrap_or(StrategyKind::Layered),
+        sensors: args.sensors,
+        repeat: args.repeat,
+        max_full_detail: args.full_detail_max,
+    };
+    super::with_device(args.device, |device| {
+        let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
+        let report = bench::run_meshes(device, &config, &mut |event| {
+            if let BenchEvent::Round { .. } = event {
+                bar.inc(1)
+            }
+        })?;
+        bar.finish_and_clear();
+        if let Some(path) = &args.json {
+            let mut files = atomic::Outputs::new();
+            files.stage_bytes(path, &serde_json::to_vec_pretty(&report)?)?;
+            files.commit()?;
+        }
+        print_mesh_report(&report)
+    })
+}
+
+fn print_mesh_report(r: &MeshReport) -> Result<()> {
+    outln!("device: {} ({})", r.device, r.driver)?;
+    outln!("{} sensors, strategy {}, {} timed runs each, interleaved; medians", r.sensor, r.strategy, r.repeat)?;
+    outln!("\n| rd | scene | triangles | detail | sensors | ms/sensor | triangles drawn/sensor | vs first (full) |")?;
+    outln!("|---:|---|---:|---|---:|---:|---:|---:|")?;
+    for m in &r.measurements {
+        outln!(
+            "| {} | {} | {} | {:?} | {} | {:.3} | {} | {:.2}× |",
+            m.rd,
+            m.scene,
+            m.triangles,
+            m.detail,
+            m.sensors,
+            m.ms_per_sensor,
+            m.drawn_triangles_per_sensor.map(|t| format!("{t:.0}")).unwrap_or_else(|| "all".into()),
+            m.vs_first
+        )?;
+    }
+    Ok(())
 }
 
 fn print_report(r: &BenchReport) -> Result<()> {

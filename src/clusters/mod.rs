@@ -21,7 +21,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 pub use build::{BUILD_VERSION, MAX_TRIANGLES, build};
-pub use select::{projected_error, selected};
+pub use select::{max_selected, projected_error, selected};
 
 /// A bounding sphere and the object-space error of the geometry it bounds (meshoptimizer's `clodBounds`).
 #[repr(C)]

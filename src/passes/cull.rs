@@ -4,14 +4,17 @@
 //! so the host records the same work whatever the scene). Shader: `glsl/cull.comp`, one invocation per
 //! (cluster, view). CPU twin: [`keeps`].
 //!
-//! A view's count may exceed `max_per_view`: the commands past it are not written, and the count says so
-//! (the drawing side must clamp it and treat the view as overflowing).
+//! A view's count may exceed `max_per_view`: the commands past it are not written, and the count says so.
+//! The batch runner sizes `max_per_view` by `clusters::max_selected`, so that this cannot happen, and
+//! checks every count it reads back.
+//!
+//! After the `views` draw counts, the counts buffer holds each view's triangles drawn (statistics, tests).
 
 use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
-use glam::{Mat4, Vec3, Vec4, Vec4Swizzles as _};
+use glam::{Mat4, Vec4, Vec4Swizzles as _};
 
 use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
 use crate::shaders;
@@ -26,7 +29,8 @@ pub struct CullBindings<'a> {
     pub sensors: &'a Buffer,
     /// `views × max_per_view` `GpuDrawCommand`s (usage: storage and indirect).
     pub commands: &'a Buffer,
-    /// One `u32` per view (usage: storage, indirect and transfer destination: it is cleared here).
+    /// Two `u32` per view: draws, then triangles (usage: storage, indirect and transfer destination: it is
+    /// cleared here).
     pub counts: &'a Buffer,
 }
 
@@ -56,9 +60,21 @@ impl CullPass {
     }
 
     /// Records: clear the counts, cull, and make the commands and counts visible to indirect draws.
-    pub fn record(&self, enc: &Encoder<'_>, set: usize, counts: &Buffer, push: &CullPush) {
+    /// `zero_commands`: also clear every command first, for draws that read all `max_per_view` of a view
+    /// (no `drawIndirectCount`): the unused ones then draw nothing.
+    pub fn record(
+        &self,
+        enc: &Encoder<'_>,
+        set: usize,
+        counts: &Buffer,
+        zero_commands: Option<&Buffer>,
+        push: &CullPush,
+    ) {
         barrier::global(enc, &[Access::IndirectRead], &[Access::TransferWrite]);
         enc.fill(counts, 0);
+        if let Some(commands) = zero_commands {
+            enc.fill(commands, 0);
+        }
         barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
         let groups = [groups_for(push.clusters, GROUP), push.views, 1];
         if push.clusters > 0 && push.views > 0 {
@@ -94,21 +110,5 @@ pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd:
     projected(cluster.own, cluster.errors.x) <= tau && projected(cluster.parent, cluster.errors.y) > tau
 }
 
-/// The clusters as the pass reads them; `emitter(surface)` says which surfaces emit.
-pub fn gpu_clusters(clusters: &crate::clusters::ClusterMesh, emitter: impl Fn(u32) -> bool) -> Vec<GpuCluster> {
-    let bounds = |b: &crate::clusters::ErrorBounds| Vec3::from(b.center).extend(b.radius);
-    clusters
-        .clusters
-        .iter()
-        .map(|k| GpuCluster {
-            sphere: Vec4::from(k.sphere),
-            own: bounds(&k.own),
-            parent: bounds(&k.parent),
-            errors: Vec4::new(k.own.error, k.parent.error, 0.0, 0.0),
-            first_index: k.first_index,
-            index_count: k.index_count,
-            flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
-            _pad: 0,
-        })
-        .collect()
-}
+/// The clusters as the pass reads them (defined beside the buffers it fills).
+pub use crate::gpu_scene::gpu_clusters;

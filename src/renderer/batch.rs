@@ -7,9 +7,11 @@
 //!   device:                  [maps b0 | reduce b0][maps b1 | reduce b1][maps b2 | reduce b2] …
 //! ```
 //!
-//! A batch is recorded as sensor maps (the strategy) → barrier → reduction, which writes each sensor's R
+//! A batch is recorded as [culling →] sensor maps (the strategy) → barrier → reduction, which writes each sensor's R
 //! into the radiance map and into the slot's results, which the host reads when the slot is next waited
-//! on: a round of refinement reads back exactly the values it sensed, nothing more.
+//! on: a round of refinement reads back exactly the values it sensed, nothing more. When the scene is drawn
+//! from its clusters, the culling pass first writes each view's draw list into the slot (compute write →
+//! indirect read), and the runner reads back each view's count with the results.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -21,7 +23,8 @@ use serde::Serialize;
 
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuSensor, GpuSensorResult, GpuZoom};
+use crate::gpu_types::{CullPush, GpuSensor, GpuSensorResult, GpuZoom};
+use crate::passes::cull::{CullBindings, CullPass};
 use crate::passes::emitters::{EmitterBindings, EmitterPass};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
 use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
@@ -49,6 +52,8 @@ pub struct BatchTimes {
     pub gpu_reduction: Option<Duration>,
     /// Bytes read back to the host (each batch's results).
     pub readback_bytes: u64,
+    /// Culled: the triangles the sensor maps drew, all views of all batches (`None` at full detail).
+    pub drawn_triangles: Option<u64>,
 }
 
 /// Receives each completed batch: its sensors' pixels and what the reduction found there.
@@ -71,6 +76,13 @@ struct Slot {
     in_flight: Vec<u32>,
 }
 
+/// The culling pass and the clusters it reads, when the maps are drawn from them.
+struct Culling {
+    pass: CullPass,
+    clusters: Arc<Buffer>,
+    count: u32,
+}
+
 pub(crate) struct BatchRunner {
     // Field order is drop order: the slots wait for their work before anything they use goes.
     slots: Vec<Slot>,
@@ -78,6 +90,7 @@ pub(crate) struct BatchRunner {
     strategy: Box<dyn Strategy>,
     /// The exact estimator's closed-form emitter term (`None` with the paper's).
     emitters: Option<EmitterPass>,
+    culling: Option<Culling>,
     reduce: ReducePass,
     /// How far a sensor sits above its surface, and its views' near plane (world units).
     bias: f32,
@@ -146,11 +159,31 @@ impl BatchRunner {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
+        // The strategy draws from the clusters (its slots have draw lists) only if the scene has them.
+        let culling = match (&scene.clusters, slots[0].maps.draws()) {
+            (Some(c), Some(_)) => {
+                let pass = CullPass::new(device, in_flight)?;
+                for (i, slot) in slots.iter().enumerate() {
+                    let draws = slot.maps.draws().context("every slot of a culled strategy has draw lists")?;
+                    let bindings = CullBindings {
+                        clusters: &c.clusters,
+                        views: slot.maps.views(),
+                        sensors: &slot.sensors,
+                        commands: &draws.commands,
+                        counts: &draws.counts,
+                    };
+                    pass.bind(device, i, &bindings);
+                }
+                Some(Culling { pass, clusters: c.clusters.clone(), count: c.count })
+            }
+            _ => None,
+        };
         Ok(Self {
             slots,
             next: 0,
             strategy,
             emitters,
+            culling,
             reduce,
             bias,
             near,
@@ -170,6 +203,11 @@ impl BatchRunner {
     /// Sensors per batch.
     pub fn capacity(&self) -> u32 {
         self.strategy.capacity()
+    }
+
+    /// Whether the sensor maps are drawn from the scene's clusters, culled per view.
+    pub fn culled(&self) -> bool {
+        self.culling.is_some()
     }
 
     /// Whether the sensors measure light groups' visibilities (the exact estimator, a scene with lights).
@@ -203,7 +241,7 @@ impl BatchRunner {
             }
         }
         self.radiance = Some(radiance.clone());
-        self.times = BatchTimes::default();
+        self.times = BatchTimes { drawn_triangles: self.culling.as_ref().map(|_| 0), ..BatchTimes::default() };
         Ok(())
     }
 
@@ -227,7 +265,8 @@ impl BatchRunner {
                 })
                 .collect();
             let views = BatchViews::new(&frames, &self.desc.layout, self.near, &self.groups, self.desc.rd);
-            let (strategy, emitters, reduce) = (&self.strategy, &self.emitters, &self.reduce);
+            let (strategy, emitters, reduce, culling) = (&self.strategy, &self.emitters, &self.reduce, &self.culling);
+            let (rd, near) = (self.desc.rd, self.near);
             let slot = &mut self.slots[index];
             slot.pixels.write(0, chunk)?;
             slot.sensors.write(0, &views.sensors)?;
@@ -241,6 +280,21 @@ impl BatchRunner {
                 if let Some(emitters) = emitters {
                     emitters.record(enc, index, chunk.len() as u32);
                 }
+                // Each view's draw list, before the maps that draw it (the pass ends on compute write →
+                // indirect read).
+                if let (Some(c), Some(draws)) = (culling, maps.draws()) {
+                    let push = CullPush {
+                        clusters: c.count,
+                        views: views.views.len() as u32,
+                        per_sensor: views.per_sensor as u32,
+                        max_per_view: draws.max_per_view,
+                        rd,
+                        near,
+                        _pad: [0; 2],
+                    };
+                    let zero = (!draws.count_buffer).then_some(&draws.commands);
+                    c.pass.record(enc, index, &draws.counts, zero, &push);
+                }
                 strategy.record(enc, maps, &views, ck)?;
                 stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 barrier::global(enc, &[Access::ColorAttachmentWrite, Access::ComputeWrite], &[Access::ComputeRead]);
@@ -252,6 +306,9 @@ impl BatchRunner {
             })?;
             slot.commands.submit()?;
             slot.commands.retire(radiance.clone());
+            if let Some(c) = &self.culling {
+                slot.commands.retire(c.clusters.clone());
+            }
             slot.in_flight = chunk.to_vec();
             self.times.batches += 1;
             self.times.host_record += start.elapsed();
@@ -284,6 +341,20 @@ impl BatchRunner {
             };
             add(&mut self.times.gpu_maps, t[1] - t[0]);
             add(&mut self.times.gpu_reduction, t[2] - t[1]);
+        }
+        if let (Some(total), Some(draws)) = (&mut self.times.drawn_triangles, slot.maps.draws()) {
+            let views = pixels.len() * self.desc.layout.views() as usize;
+            let counts: Vec<u32> = draws.counts.read(2 * views)?;
+            // The slots are sized by a bound no selection exceeds; a view beyond it would have lost geometry.
+            if let Some(v) = counts[..views].iter().position(|&n| n > draws.max_per_view) {
+                anyhow::bail!(
+                    "sensor view {v} selected {} clusters, more than the {} its draw list holds: a bug in the cluster \
+                     bound or the culling pass; nothing was written",
+                    counts[v],
+                    draws.max_per_view
+                );
+            }
+            *total += counts[views..].iter().map(|&n| n as u64).sum::<u64>();
         }
         deliver(&pixels, &r);
         Ok(())

@@ -103,6 +103,37 @@ impl Progress for Quiet {}
 /// Batches in flight by default: one rendering while the host prepares the next.
 pub const DEFAULT_IN_FLIGHT: u32 = 2;
 
+/// Meshes of at least this many triangles are drawn into the sensor maps from their clusters, culled and
+/// at the level of detail each view needs ([`Detail::Auto`]); smaller ones at full detail, bit for bit as
+/// before (every shipped scene has under 300). On lavapipe the two cost the same per sensor at a few hundred
+/// triangles and clusters are 9× faster at 2 000 (docs/BENCHMARKS.md "Large meshes"); a GPU draws small
+/// meshes cheaper, hence the margin.
+pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
+
+/// How finely the sensor maps draw the scene (docs/DESIGN.md §9). The camera's G-buffer and the emitters
+/// are always full detail.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Detail {
+    /// Clusters from [`CLUSTER_MIN_TRIANGLES`] triangles on, where the device can draw them.
+    #[default]
+    Auto,
+    /// Every view draws every triangle.
+    Full,
+    /// Clusters whatever the mesh's size, where the device can draw them.
+    Clusters,
+}
+
+impl Detail {
+    fn wants_clusters(self, triangles: usize) -> bool {
+        match self {
+            Detail::Auto => triangles >= CLUSTER_MIN_TRIANGLES,
+            Detail::Full => false,
+            Detail::Clusters => triangles > 0,
+        }
+    }
+}
+
 /// What a renderer is built for. These fix its pipelines and sensor maps; everything else is chosen per
 /// render ([`FrameParams`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,6 +150,7 @@ pub struct RendererConfig {
     /// Batches in flight, ≥ 1 (each has its own maps: memory grows with it).
     pub in_flight: u32,
     pub strategy: StrategyRequest,
+    pub detail: Detail,
 }
 
 impl RendererConfig {
@@ -176,6 +208,11 @@ impl<'a> RendererBuilder<'a> {
 
     pub fn strategy(mut self, request: StrategyRequest) -> Self {
         self.config.strategy = request;
+        self
+    }
+
+    pub fn detail(mut self, detail: Detail) -> Self {
+        self.config.detail = detail;
         self
     }
 
@@ -241,6 +278,7 @@ pub fn self_check(
         max_batch: None,
         in_flight: DEFAULT_IN_FLIGHT,
         strategy: StrategyRequest::Fixed(kind),
+        detail: Detail::Full,
     };
     let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
     strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget), kind)
@@ -262,6 +300,7 @@ pub fn unsupported(
         max_batch: None,
         in_flight: DEFAULT_IN_FLIGHT,
         strategy: StrategyRequest::Fixed(kind),
+        detail: Detail::Full,
     };
     let layout = config.layout(&Lights::new(&scene.mesh));
     let desc = StrategyDesc { layout, rd, budget: config.batch_budget(device, &layout) };
@@ -356,13 +395,14 @@ impl Renderer {
             max_batch: None,
             in_flight: DEFAULT_IN_FLIGHT,
             strategy: StrategyRequest::Auto,
+            detail: Detail::Auto,
         };
         RendererBuilder { device, scene, config, cache: None, events: None }
     }
 
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
         let scale = scene.mesh.scale();
-        let gpu_scene = GpuScene::upload(device, scene)?;
+        let gpu_scene = GpuScene::upload(device, scene, cluster_hierarchy(device, scene, config.detail).as_ref())?;
         let layout = config.layout(&gpu_scene.lights);
         let budget = config.batch_budget(device, &layout);
         let desc = StrategyDesc { layout, rd: config.sensor_size, budget };
@@ -388,6 +428,16 @@ impl Renderer {
 
     pub fn strategy(&self) -> StrategyKind {
         self.runner.kind()
+    }
+
+    /// Whether the sensor maps are drawn from the scene's clusters (see [`Detail`]).
+    pub fn culled(&self) -> bool {
+        self.runner.culled()
+    }
+
+    /// What the sensing since the last render or [`Renderer::sense_at`] cost (batches, times, triangles).
+    pub fn batch_times(&self) -> BatchTimes {
+        self.runner.times
     }
 
     /// How the strategy was chosen.
@@ -580,6 +630,20 @@ fn preview(g: &GBufferData, r: &[Vec4], refinement: &Refinement) -> Vec<Vec4> {
     (g.emission.iter().zip(&g.albedo).zip(&radiance))
         .map(|((le, kd), r)| (le.truncate() + kd.truncate() * r.truncate()).extend(1.0))
         .collect()
+}
+
+/// The cluster hierarchy to draw the sensor maps from, if `detail` asks for one for this mesh and the device
+/// can draw from it (read from the cluster cache, else built and cached; the cache is advisory).
+fn cluster_hierarchy(device: &Device, scene: &Scene, detail: Detail) -> Option<crate::clusters::ClusterMesh> {
+    if !detail.wants_clusters(scene.mesh.triangles.len())
+        || crate::passes::sensor_maps::culling_unsupported(device, 0).is_some()
+    {
+        return None;
+    }
+    let dir = crate::clusters::cache::default_dir();
+    let (hierarchy, _cache_note) = crate::clusters::cache::load_or_build(&scene.mesh, dir.as_deref());
+    let bound = crate::clusters::max_selected(&hierarchy) as u32;
+    crate::passes::sensor_maps::culling_unsupported(device, bound).is_none().then_some(hierarchy)
 }
 
 /// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.

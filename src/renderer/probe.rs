@@ -75,6 +75,8 @@ impl Prober for ProbeRenderer<'_> {
                     memory_budget: Some(self.budget),
                     max_batch: batch,
                     strategy: StrategyRequest::Fixed(kind),
+                    // The probe checks how strategies rasterize, on a scene too small for clusters anyway.
+                    detail: super::Detail::Full,
                     ..self.config
                 };
                 e.insert(Renderer::new(

@@ -32,6 +32,10 @@ pub struct RenderStats {
     pub interpolated_quads: u64,
     pub batch_size: u32,
     pub batches: u64,
+    /// Whether the sensor maps were drawn from the scene's clusters (docs/DESIGN.md §9), and then the
+    /// triangles they drew per sensor, all views together.
+    pub culled: bool,
+    pub drawn_triangles_per_sensor: Option<f64>,
     pub in_flight: u32,
     /// Wall time of the whole render.
     pub total_seconds: f64,
@@ -124,6 +128,12 @@ impl RenderStats {
             interpolated_quads: counts.interpolated_quads,
             batch_size: renderer.batch_size(),
             batches: renderer.runner.times.batches,
+            culled: renderer.culled(),
+            drawn_triangles_per_sensor: renderer
+                .runner
+                .times
+                .drawn_triangles
+                .map(|t| if sensors > 0 { t as f64 / sensors as f64 } else { 0.0 }),
             in_flight: renderer.runner.in_flight(),
             total_seconds: total,
             build_seconds: renderer.build_time().as_secs_f64(),

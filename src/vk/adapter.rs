@@ -25,6 +25,8 @@ pub struct Limits {
     pub max_storage_buffer_range: u32,
     pub max_push_constants_size: u32,
     pub max_memory_allocation_size: u64,
+    /// Most draws one indirect draw command may read.
+    pub max_draw_indirect_count: u32,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
 }
@@ -48,6 +50,12 @@ pub struct Features {
     pub multiview: bool,
     /// `gl_ClipDistance`: two half hemicube faces share one layer.
     pub shader_clip_distance: bool,
+    /// `vkCmdDrawIndexedIndirectCount` (Vulkan 1.2 `drawIndirectCount`): the device reads how many draws.
+    pub draw_indirect_count: bool,
+    /// Indirect draws with more than one command (`multiDrawIndirect`).
+    pub multi_draw_indirect: bool,
+    /// Indirect commands with a non-zero `firstInstance` (`drawIndirectFirstInstance`).
+    pub draw_indirect_first_instance: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -203,12 +211,16 @@ fn describe(instance: &Instance, index: usize, handle: vk::PhysicalDevice, requi
             max_storage_buffer_range: l.max_storage_buffer_range,
             max_push_constants_size: l.max_push_constants_size,
             max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+            max_draw_indirect_count: l.max_draw_indirect_count,
             timestamp_period: l.timestamp_period,
         },
         features: Features {
             shader_output_layer: features12.shader_output_layer == vk::TRUE,
             multiview: features11.multiview == vk::TRUE,
             shader_clip_distance: core_features.shader_clip_distance == vk::TRUE,
+            draw_indirect_count: features12.draw_indirect_count == vk::TRUE,
+            multi_draw_indirect: core_features.multi_draw_indirect == vk::TRUE,
+            draw_indirect_first_instance: core_features.draw_indirect_first_instance == vk::TRUE,
         },
         missing,
     }

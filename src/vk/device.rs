@@ -59,9 +59,14 @@ impl Device {
         let queue_family = adapter.queue_family.expect("selected adapters have a queue family");
 
         let f = adapter.features;
-        let mut features12 = vk::PhysicalDeviceVulkan12Features::default().shader_output_layer(f.shader_output_layer);
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
+            .shader_output_layer(f.shader_output_layer)
+            .draw_indirect_count(f.draw_indirect_count);
         let mut features11 = vk::PhysicalDeviceVulkan11Features::default().multiview(f.multiview);
-        let core = vk::PhysicalDeviceFeatures::default().shader_clip_distance(f.shader_clip_distance);
+        let core = vk::PhysicalDeviceFeatures::default()
+            .shader_clip_distance(f.shader_clip_distance)
+            .multi_draw_indirect(f.multi_draw_indirect)
+            .draw_indirect_first_instance(f.draw_indirect_first_instance);
         let mut features =
             vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut features12).push_next(&mut features11);
         let priorities = [1.0];

@@ -150,6 +150,38 @@ impl<'a> RenderPassScope<'_, 'a> {
         unsafe { self.encoder.device.raw.cmd_bind_vertex_buffers(self.encoder.raw, 0, &[buffer.raw], &[0]) };
     }
 
+    /// Binds `buffer` as the index buffer (32-bit indices).
+    pub fn bind_indices(&self, buffer: &Buffer) {
+        // SAFETY: recording state; the buffer outlives the submission.
+        unsafe {
+            self.encoder.device.raw.cmd_bind_index_buffer(self.encoder.raw, buffer.raw, 0, vk::IndexType::UINT32)
+        };
+    }
+
+    /// Draws the `VkDrawIndexedIndirectCommand`s at byte `offset` of `commands`: as many as the `u32` at
+    /// byte `count_offset` of `counts` says, at most `max` (`count` `None`: exactly `max`, which needs
+    /// `multiDrawIndirect` when above 1). `count` `Some` needs `drawIndirectCount`.
+    pub fn draw_indexed_indirect(&self, commands: &Buffer, offset: u64, count: Option<(&Buffer, u64)>, max: u32) {
+        let stride = size_of::<vk::DrawIndexedIndirectCommand>() as u32;
+        let (device, raw) = (&self.encoder.device.raw, self.encoder.raw);
+        // SAFETY: inside a render pass with a graphics pipeline, vertex and index buffers bound by the caller;
+        // the buffers hold `max` commands from `offset` and a count at `count_offset` (checked by callers).
+        unsafe {
+            match count {
+                Some((counts, count_offset)) => device.cmd_draw_indexed_indirect_count(
+                    raw,
+                    commands.raw,
+                    offset,
+                    counts.raw,
+                    count_offset,
+                    max,
+                    stride,
+                ),
+                None => device.cmd_draw_indexed_indirect(raw, commands.raw, offset, max, stride),
+            }
+        }
+    }
+
     /// Points viewport and scissor at `rect` of the framebuffer (a tile of an atlas, say).
     pub fn set_viewport_scissor(&self, rect: vk::Rect2D) {
         let viewport = vk::Viewport {

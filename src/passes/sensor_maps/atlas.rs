@@ -48,11 +48,12 @@ impl Atlas {
             "an atlas of {layers} tiles of {}² does not fit a framebuffer",
             desc.rd
         );
-        let capacity = (max_columns * max_rows / layers).min(desc.batch_limit(device)?).max(1);
+        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_ATLAS_VERT, 0), true)?;
+        let capacity =
+            (max_columns * max_rows / layers).min(desc.batch_limit(device, pipeline.draw_bytes(&desc))?).max(1);
         let tiles = capacity * layers;
         let columns = tiles.min(max_columns);
         let rows = tiles.div_ceil(columns);
-        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_ATLAS_VERT, 0)?;
         Ok(Self { pipeline, desc, columns, rows, capacity })
     }
 }
@@ -93,7 +94,7 @@ impl Strategy for Atlas {
                 let offset =
                     vk::Offset2D { x: ((tile % self.columns) * rd) as i32, y: ((tile / self.columns) * rd) as i32 };
                 pass.set_viewport_scissor(vk::Rect2D { offset, extent: vk::Extent2D { width: rd, height: rd } });
-                self.pipeline.draw(&pass, &push, 1, i * batch.per_sensor as u32 + j as u32);
+                self.pipeline.draw_views(&pass, slot, &push, (i * batch.per_sensor as u32 + j as u32, 1));
             }
         }
         Ok(())

@@ -29,8 +29,8 @@ impl Layered {
         let layers = desc.layers();
         let by_layers = limits.max_framebuffer_layers.min(limits.max_image_array_layers) / layers;
         ensure!(by_layers >= 1, "this device cannot render {layers} layers in one pass");
-        let capacity = by_layers.min(desc.batch_limit(device)?);
-        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_LAYERED_VERT, 0)?;
+        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_LAYERED_VERT, 0), true)?;
+        let capacity = by_layers.min(desc.batch_limit(device, pipeline.draw_bytes(&desc))?);
         Ok(Self { pipeline, desc, capacity })
     }
 }
@@ -72,7 +72,7 @@ impl Strategy for Layered {
         };
         let pass = self.pipeline.begin(enc, slot, framebuffer, ck, None);
         let push = SensorPush { epsilon: ck.epsilon, ..Default::default() };
-        self.pipeline.draw(&pass, &push, count * batch.per_sensor as u32, 0);
+        self.pipeline.draw_views(&pass, slot, &push, (0, count * batch.per_sensor as u32));
         Ok(())
     }
 }

@@ -11,7 +11,11 @@
 //! | `atlas`      | one instanced draw into tiles of one 2D image (ours)        | `maxFramebufferWidth²`    |
 //!
 //! A strategy only *records*: the renderer's batch runner owns the batches in flight, each with its own
-//! [`SlotMaps`] (made by [`Strategy::new_slot`]), and submits them. Shaders: `glsl/sensor_<strategy>.vert`
+//! [`SlotMaps`] (made by [`Strategy::new_slot`]), and submits them.
+//!
+//! When the scene has a cluster hierarchy (`GpuScene::clusters`), every strategy but `multiview` draws
+//! each view from its own list of indexed indirect draws ([`DrawLists`]), which the culling pass
+//! (`passes::cull`) fills before the maps are drawn; else each view draws the whole triangle soup. Shaders: `glsl/sensor_<strategy>.vert`
 //! (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
 
 mod atlas;
@@ -27,7 +31,7 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
+use crate::gpu_types::{GpuDrawCommand, GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::passes::{DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::sensors::layout::SensorLayout;
 use crate::sensors::views::BatchViews;
@@ -109,10 +113,12 @@ impl StrategyDesc {
         self.layout.groups > 0
     }
 
-    /// Sensors one batch may hold: what the memory budget allows and one reduction dispatch can cover (at
-    /// least one).
-    pub fn batch_limit(&self, device: &Device) -> Result<u32> {
-        let per_sensor = self.layers() as u64 * (self.rd as u64).pow(2) * TEXEL_BYTES;
+    /// Sensors one batch may hold: what the memory budget allows (maps, depth and `draw_bytes` of draw lists
+    /// per sensor), what one storage buffer of draw lists may hold, and what one reduction dispatch can
+    /// cover (at least one).
+    pub fn batch_limit(&self, device: &Device, draw_bytes: u64) -> Result<u32> {
+        let maps = self.layers() as u64 * (self.rd as u64).pow(2) * TEXEL_BYTES;
+        let per_sensor = maps + draw_bytes;
         let limits = &device.adapter.limits;
         ensure!(
             per_sensor <= limits.max_memory_allocation_size && per_sensor <= device.adapter.device_local_bytes,
@@ -120,7 +126,9 @@ impl StrategyDesc {
             self.rd
         );
         let by_budget = (self.budget / per_sensor).max(1);
-        Ok(by_budget.min(limits.max_compute_work_group_count[0] as u64) as u32)
+        let by_range = (limits.max_storage_buffer_range as u64).checked_div(draw_bytes).unwrap_or(u64::MAX);
+        ensure!(by_range >= 1, "one sensor's draw lists ({draw_bytes} bytes) exceed a storage buffer");
+        Ok(by_budget.min(by_range).min(limits.max_compute_work_group_count[0] as u64) as u32)
     }
 }
 
@@ -148,6 +156,20 @@ pub fn unsupported(kind: StrategyKind, device: &Device, desc: &StrategyDesc) -> 
         }
         _ => None,
     }
+}
+
+/// Why the sensor maps cannot draw from a cluster hierarchy whose views draw up to `max_per_view` clusters
+/// on `device`, if they cannot: indirect draws must name their view (`firstInstance`) and be many.
+pub fn culling_unsupported(device: &Device, max_per_view: u32) -> Option<String> {
+    let f = &device.adapter.features;
+    if !f.draw_indirect_first_instance {
+        return Some("no drawIndirectFirstInstance".into());
+    }
+    if !f.multi_draw_indirect {
+        return Some("no multiDrawIndirect".into());
+    }
+    let limit = device.adapter.limits.max_draw_indirect_count;
+    (limit < max_per_view).then(|| format!("maxDrawIndirectCount {limit} < {max_per_view} clusters per view"))
 }
 
 /// Creates strategy `kind` for sensors described by `desc`.
@@ -181,6 +203,8 @@ pub struct SlotMaps {
     partial: Option<(u32, Framebuffer)>,
     /// The batch's views, host-written before recording.
     views: Buffer,
+    /// Culled: each view's draws, filled by the culling pass.
+    draws: Option<DrawLists>,
     // Dropped after the set it holds (never used by the GPU after the slot is dropped: the runner waits).
     set: vk::DescriptorSet,
     _pool: DescriptorPool,
@@ -223,7 +247,18 @@ impl SlotMaps {
         let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 2)])?;
         let set = pool.allocate(&pipeline.layout)?;
         SetWriter::new(set).storage_buffer(0, &views).storage_buffer(1, &pipeline.surfaces).apply(device);
-        Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, set, _pool: pool })
+        let draws = pipeline.culled.as_ref().map(|c| DrawLists::new(device, max_views as u32, c)).transpose()?;
+        Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, draws, set, _pool: pool })
+    }
+
+    /// The views of the batch being recorded, sensor-major (`BatchViews` order), for the culling pass.
+    pub fn views(&self) -> &Buffer {
+        &self.views
+    }
+
+    /// The draw lists the culling pass must fill before the maps are drawn; `None`: full detail.
+    pub fn draws(&self) -> Option<&DrawLists> {
+        self.draws.as_ref()
     }
 
     /// A framebuffer over layers `first..first + count` of the maps and depth. `framebuffer_layers` is
@@ -264,6 +299,42 @@ impl SlotMaps {
     }
 }
 
+/// One batch's indexed indirect draws: `max_per_view` command slots per view, and per view its number of
+/// draws and (after them, for statistics) of triangles, both written by the culling pass.
+pub struct DrawLists {
+    /// `GpuDrawCommand`s, view-major (device-local).
+    pub commands: Buffer,
+    /// Two `u32` per view of the largest batch (host-readable: the runner checks them for overflow).
+    pub counts: Buffer,
+    pub max_per_view: u32,
+    /// The device reads each view's count (`drawIndirectCount`); else every slot is drawn, the unused
+    /// ones zeroed by the culling pass.
+    pub count_buffer: bool,
+}
+
+impl DrawLists {
+    fn new(device: &Arc<Device>, views: u32, culled: &Culled) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let bytes = views as u64 * culled.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64;
+        Ok(Self {
+            commands: Buffer::new(device, "sensor draw lists", bytes, usage, MemoryLocation::GpuOnly)?,
+            counts: Buffer::new(device, "sensor draw counts", 8 * views as u64, usage, MemoryLocation::GpuToCpu)?,
+            max_per_view: culled.max_per_view,
+            count_buffer: culled.count_buffer,
+        })
+    }
+}
+
+/// The cluster hierarchy a culled pipeline draws from.
+struct Culled {
+    vertices: Arc<Buffer>,
+    indices: Arc<Buffer>,
+    max_per_view: u32,
+    count_buffer: bool,
+}
+
 /// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
 struct SensorPipeline {
     // Field order is drop order.
@@ -278,12 +349,20 @@ struct SensorPipeline {
     exact: bool,
     /// The paper's estimator: maps hold `Ke` divided by this ([`emission_scale`]).
     emission_scale: f32,
+    /// Drawn from the scene's clusters, view by view; `None`: the whole soup.
+    culled: Option<Culled>,
     device: Arc<Device>,
 }
 
 impl SensorPipeline {
-    /// `view_mask` 0 for ordinary passes.
-    fn new(device: &Arc<Device>, scene: &GpuScene, desc: &StrategyDesc, vertex: &[u8], view_mask: u32) -> Result<Self> {
+    /// `view_mask` 0 for ordinary passes. `cull`: draw from the scene's clusters where it has them.
+    fn new(
+        device: &Arc<Device>,
+        scene: &GpuScene,
+        desc: &StrategyDesc,
+        (vertex, view_mask): (&[u8], u32),
+        cull: bool,
+    ) -> Result<Self> {
         let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let stage = vk::ShaderStageFlags::VERTEX;
@@ -315,8 +394,20 @@ impl SensorPipeline {
             surfaces: scene.surfaces.clone(),
             exact: desc.exact(),
             emission_scale: emission_scale(scene, &desc.layout),
+            culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
+                vertices: c.vertices.clone(),
+                indices: c.indices.clone(),
+                max_per_view: c.max_per_view.max(1),
+                count_buffer: device.adapter.features.draw_indirect_count,
+            }),
             device: device.clone(),
         })
+    }
+
+    /// Bytes of draw lists per sensor of `desc` (0 at full detail), for the batch size.
+    fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
+        let per_view = self.culled.as_ref().map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64);
+        desc.layout.views() as u64 * per_view
     }
 
     /// Begins the render pass on `framebuffer` (over `area`, or all of it) and binds the pipeline, the
@@ -331,8 +422,38 @@ impl SensorPipeline {
     ) -> RenderPassScope<'e, 'a> {
         let pass = enc.begin_render_pass(&self.render_pass, framebuffer, &SlotMaps::clears(ck.background), area);
         pass.bind(&self.pipeline, &self.layout, slot.set);
-        pass.bind_vertices(&self.vertices);
+        match &self.culled {
+            Some(c) => {
+                pass.bind_vertices(&c.vertices);
+                pass.bind_indices(&c.indices);
+            }
+            None => pass.bind_vertices(&self.vertices),
+        }
         pass
+    }
+
+    /// Draws views `first..first + count` of the slot (each into the layer or tile it names): one instanced
+    /// draw of the whole scene, or, culled, each view's own draw list.
+    fn draw_views(
+        &self,
+        pass: &RenderPassScope<'_, '_>,
+        slot: &SlotMaps,
+        push: &SensorPush,
+        (first, count): (u32, u32),
+    ) {
+        match &slot.draws {
+            None => self.draw(pass, push, count, first),
+            Some(d) => {
+                let push = SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push };
+                pass.push(&self.layout, &push);
+                let stride = size_of::<GpuDrawCommand>() as u64;
+                for v in first..first + count {
+                    let offset = v as u64 * d.max_per_view as u64 * stride;
+                    let counted = d.count_buffer.then_some((&d.counts, 4 * v as u64));
+                    pass.draw_indexed_indirect(&d.commands, offset, counted, d.max_per_view);
+                }
+            }
+        }
     }
 
     /// Draws the scene `instances` times starting at view `first_instance`.

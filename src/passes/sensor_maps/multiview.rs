@@ -45,13 +45,14 @@ impl Multiview {
         ensure!(group_sensors >= 1, "maxMultiviewViewCount {} < {layers}", limits.max_multiview_view_count);
         let group_layers = group_sensors * layers;
         let groups = (limits.max_image_array_layers / group_layers)
-            .min(desc.batch_limit(device)?.div_ceil(group_sensors))
+            .min(desc.batch_limit(device, 0)?.div_ceil(group_sensors))
             .max(1);
         let view_layers = desc.layout.view_layers();
         let per_layer: Vec<Vec<usize>> =
             (0..layers).map(|l| (0..view_layers.len()).filter(|&v| view_layers[v] == l).collect()).collect();
         let view_mask = if group_layers == 32 { u32::MAX } else { (1 << group_layers) - 1 };
-        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_MULTIVIEW_VERT, view_mask)?;
+        // Full detail: a multiview draw serves k views at once, so there is no one view's list to draw.
+        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_MULTIVIEW_VERT, view_mask), false)?;
         Ok(Self { pipeline, per_layer, desc, group_layers, group_sensors, groups })
     }
 

@@ -27,9 +27,13 @@ impl PerSensor {
         let limits = &device.adapter.limits;
         let layers = desc.layers();
         ensure!(limits.max_framebuffer_layers >= layers, "this device cannot render {layers} layers in one pass");
-        let capacity =
-            if one_submission { (limits.max_image_array_layers / layers).min(desc.batch_limit(device)?) } else { 1 };
-        let pipeline = SensorPipeline::new(device, scene, &desc, shaders::SENSOR_LAYERED_VERT, 0)?;
+        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_LAYERED_VERT, 0), true)?;
+        let draw_bytes = pipeline.draw_bytes(&desc);
+        let capacity = if one_submission {
+            (limits.max_image_array_layers / layers).min(desc.batch_limit(device, draw_bytes)?)
+        } else {
+            1
+        };
         Ok(Self { pipeline, desc, capacity, one_submission })
     }
 }
@@ -65,7 +69,7 @@ impl Strategy for PerSensor {
         for i in 0..batch.len() as u32 {
             let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[i as usize], ck, None);
             let push = SensorPush { epsilon: ck.epsilon, layer_base: i * layers, ..Default::default() };
-            self.pipeline.draw(&pass, &push, per_sensor, i * per_sensor);
+            self.pipeline.draw_views(&pass, slot, &push, (i * per_sensor, per_sensor));
         }
         Ok(())
     }

@@ -1,0 +1,142 @@
+//! Sensor maps drawn from the cluster hierarchy (docs/DESIGN.md §9) against the same scene at full detail:
+//! a box with a 30k-triangle sphere, every pixel sensed; R must agree within 1 % per-pixel relative RMSE on
+//! lit pixels, and the triangles the maps drew must be what the culling pass's CPU twin selects.
+
+mod common;
+
+use glam::{Vec3, Vec4};
+use sensorlight::clusters;
+use sensorlight::gpu_scene::gpu_clusters;
+use sensorlight::light::groups::Lights;
+use sensorlight::output::compare::{Picture, agreement};
+use sensorlight::params::EstimatorKind;
+use sensorlight::passes::cull::keeps;
+use sensorlight::renderer::{Detail, Quiet, Renderer, probe_pixels};
+use sensorlight::scene::builtin::rect;
+use sensorlight::scene::{Aabb, Camera, ImageSize, Scene};
+use sensorlight::sensors::SensorKind;
+use sensorlight::sensors::frame::{self, SensorFrame};
+use sensorlight::sensors::views::BatchViews;
+use sensorlight::strategy::StrategyKind;
+
+const RD: u32 = 32;
+
+/// An open box (floor, ceiling, back and side walls), a ceiling light and a sphere of 30,624 triangles.
+fn ball_in_a_box(size: (u32, u32)) -> Scene {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let c = Vec3::new(0.0, 1.0, 0.0);
+    let groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, x, z, y)),
+        ("ceiling", 0, rect(2.0 * y, x, z, -y)),
+        ("back", 0, rect(c - z, x, y, z)),
+        ("left", 1, rect(c - x, z, y, x)),
+        ("right", 0, rect(c + x, z, y, -x)),
+        ("light", 2, rect(1.99 * y, x * 0.4, z * 0.4, -y)),
+        ("ball", 0, common::meshes::sphere(Vec3::new(-0.2, 0.5, -0.1), 0.45, 88)),
+    ];
+    let materials = vec![
+        common::material("white", 0.7, 0.0),
+        common::material("red", 0.6, 0.0),
+        common::material("light", 0.5, 4.0),
+    ];
+    let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), c, y, 40.0).unwrap();
+    common::scene(groups, materials, camera, size)
+}
+
+fn renderer<'a>(
+    device: &'a std::sync::Arc<sensorlight::vk::Device>,
+    scene: &'a Scene,
+    kind: StrategyKind,
+    detail: Detail,
+) -> Renderer {
+    let r = Renderer::builder(device, scene, SensorKind::Hemicube, RD)
+        .estimator(EstimatorKind::Exact)
+        .detail(detail)
+        .build_unchecked(kind)
+        .unwrap();
+    assert_eq!(r.culled(), detail == Detail::Clusters, "{kind}: drawn from clusters as asked");
+    r
+}
+
+fn picture(name: &str, size: ImageSize, r: &[Vec4], ids: &[u32]) -> Picture {
+    Picture {
+        name: name.into(),
+        width: size.width as usize,
+        height: size.height as usize,
+        rgb: r.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        surface_id: Some(ids.iter().map(|&i| i as f32).collect()),
+        std_error: None,
+        emitter: None,
+    }
+}
+
+#[test]
+fn culled_sensor_maps_give_full_detail_r_within_one_percent() {
+    let scene = ball_in_a_box((32, 32));
+    assert!(scene.mesh.triangles.len() > 30_000);
+    let setup = common::every_pixel(SensorKind::Hemicube, RD, 0.1);
+    let size = scene.image;
+    common::gpu(|device| {
+        let full = renderer(device, &scene, StrategyKind::Layered, Detail::Full).render(size, &setup.frame, &Quiet);
+        let full = full.unwrap();
+        assert!(!full.stats.culled && full.stats.drawn_triangles_per_sensor.is_none());
+        let reference = picture("full detail", size, &full.radiance, &full.gbuffer.surface);
+        for kind in [StrategyKind::Layered, StrategyKind::SingleCb, StrategyKind::Atlas] {
+            let out = renderer(device, &scene, kind, Detail::Clusters).render(size, &setup.frame, &Quiet).unwrap();
+            let a = agreement(&picture("culled", size, &out.radiance, &out.gbuffer.surface), &reference).unwrap();
+            let drawn = out.stats.drawn_triangles_per_sensor.unwrap();
+            eprintln!(
+                "{kind}: relative RMSE of R {:.5} over {} lit pixels, {drawn:.0} triangles drawn per sensor",
+                a.relative_rmse, a.lit_pixels
+            );
+            assert!(a.lit_pixels > 500, "{} lit pixels", a.lit_pixels);
+            assert!(a.relative_rmse < 0.01, "{kind}: relative RMSE {:.4} of R, culled vs full", a.relative_rmse);
+            // 7 views of 30k triangles each at full detail: culling must draw far fewer.
+            assert!(drawn > 0.0 && drawn < 7.0 * 30_000.0 / 4.0, "{kind}: {drawn} triangles per sensor");
+        }
+    });
+}
+
+#[test]
+fn the_maps_draw_the_triangles_the_cpu_twin_selects() {
+    let scene = ball_in_a_box((32, 32));
+    let setup = common::every_pixel(SensorKind::Hemicube, RD, 0.1);
+    let hierarchy = clusters::build(&scene.mesh);
+    let gpu = gpu_clusters(&hierarchy, |s| scene.mesh.material_of(s).is_emitter());
+    let lights = Lights::new(&scene.mesh);
+    let groups: Vec<Aabb> = lights.groups.iter().map(|g| g.bounds).collect();
+    let scale = scene.mesh.scale();
+    let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
+    for kind in [StrategyKind::Layered, StrategyKind::PerSensor] {
+        let (drawn, expected) = common::gpu(|device| {
+            let mut r = renderer(device, &scene, kind, Detail::Clusters);
+            let g = r.gbuffer(scene.image).unwrap();
+            let pixels = probe_pixels(&g.surface, 24);
+            r.sense_at(scene.image, &pixels, &setup.frame).unwrap();
+            let drawn = r.batch_times().drawn_triangles.unwrap();
+            // The views as the batch runner builds them: exact-estimator hemicubes turned per pixel.
+            let width = scene.image.width;
+            let frames: Vec<SensorFrame> = pixels
+                .iter()
+                .map(|&i| {
+                    let (p, n) = (g.position[i as usize].truncate(), g.normal[i as usize].truncate());
+                    SensorFrame::new(p, n, bias).turned(frame::pixel_turn(i % width, i / width))
+                })
+                .collect();
+            let layout = r.config().layout(&lights);
+            let batch = BatchViews::new(&frames, &layout, near, &groups, RD);
+            let expected: u64 = (0..batch.views.len())
+                .map(|v| {
+                    let sensor = &batch.sensors[v / batch.per_sensor];
+                    gpu.iter()
+                        .filter(|k| keeps(k, &batch.views[v], sensor, RD, near))
+                        .map(|k| (k.index_count / 3) as u64)
+                        .sum::<u64>()
+                })
+                .sum();
+            (drawn, expected)
+        });
+        eprintln!("{kind}: {drawn} triangles drawn, CPU twin {expected}");
+        assert_eq!(drawn, expected, "{kind}: triangles drawn by the maps against the CPU twin's selection");
+    }
+}
