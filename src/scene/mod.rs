@@ -232,7 +232,12 @@ impl Scene {
         let mut warnings = obj.warnings;
         let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
-        let camera = auto_camera::frame(&mesh.bounds, image).with_context(|| format!("{}: camera", path.display()))?;
+        let front_area = |forward: Vec3| -> f32 {
+            let area = |t: &Triangle| 0.5 * (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length();
+            mesh.triangles.iter().map(|t| area(t) * (-t.normal.dot(forward)).max(0.0)).sum()
+        };
+        let camera = auto_camera::frame(&mesh.bounds, image, front_area)
+            .with_context(|| format!("{}: camera", path.display()))?;
         let render = toml::Table::new();
         let mesh_file = Some(path.to_owned());
         Ok(Self { path: path.to_owned(), mesh, camera, image, render, warnings, inputs: obj.files, mesh_file })
