@@ -15,8 +15,8 @@
 //!
 //! When the scene has a cluster hierarchy (`GpuScene::clusters`), every strategy but `multiview` draws
 //! each view from its own list of indexed indirect draws ([`DrawLists`]), which the culling pass
-//! (`passes::cull`) fills before the maps are drawn; else each view draws the whole triangle soup. Shaders: `glsl/sensor_<strategy>.vert`
-//! (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
+//! (`passes::cull`) fills before the maps are drawn; else each view draws the whole triangle soup.
+//! Shaders: `glsl/sensor_<strategy>.vert` (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
 
 mod atlas;
 mod layered;
