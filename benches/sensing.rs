@@ -22,7 +22,7 @@ fn gpu_sensing(c: &mut Criterion) {
     };
     let size = ImageSize { width: 32, height: 32 };
     let scene = builtin::lightbox(size);
-    let frame = FrameParams { epsilon: 0.2, background: Vec3::splat(0.05), tile: 1, dradiance: 0.0, filter_radius: 0 };
+    let frame = FrameParams::every_pixel(0.2, Vec3::splat(0.05));
     let mut group = c.benchmark_group(format!("sense 64 hemicube sensors on {}", device.adapter.name));
     group.sample_size(10);
     for rd in [32, 128] {

@@ -123,13 +123,7 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(Be
         }
     }
 
-    let frame = FrameParams {
-        epsilon: config.estimator.epsilon,
-        background: config.estimator.background,
-        tile: 1,
-        dradiance: 0.0,
-        filter_radius: 0,
-    };
+    let frame = FrameParams::every_pixel(config.estimator.epsilon, config.estimator.background);
     let layers = sensor.layers() as u64; // the main layers: the fill rate's yardstick
     let mut pixels = Vec::new();
     let mut measurements = Vec::new();
@@ -302,13 +296,7 @@ pub fn run_meshes(
     events: &mut dyn FnMut(BenchEvent),
 ) -> Result<MeshReport> {
     let sensor = config.estimator.sensor;
-    let frame = FrameParams {
-        epsilon: config.estimator.epsilon,
-        background: config.estimator.background,
-        tile: 1,
-        dradiance: 0.0,
-        filter_radius: 0,
-    };
+    let frame = FrameParams::every_pixel(config.estimator.epsilon, config.estimator.background);
     let mut measurements = Vec::new();
     for &rd in &config.sizes {
         let mut runs = Vec::new();

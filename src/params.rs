@@ -279,6 +279,14 @@ pub struct FrameParams {
     pub filter_radius: u32,
 }
 
+impl FrameParams {
+    /// Every pixel sensed and nothing filtered: R exactly as the sensors give it (probes, benchmarks,
+    /// comparisons with the oracle).
+    pub const fn every_pixel(epsilon: f32, background: Vec3) -> Self {
+        Self { epsilon, background, tile: 1, dradiance: 0.0, filter_radius: 0 }
+    }
+}
+
 /// Everything `render` resolves from flags, the scene file and defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderParams {

@@ -8,6 +8,7 @@ use glam::{DVec3, Vec3};
 use sensorlight::gpu_types::radiance_state::SENSED;
 use sensorlight::light::polygon::{Domain, Receiver, projected_solid_angle};
 use sensorlight::params::EstimatorKind;
+use sensorlight::reference::lights::LUMINANCE;
 use sensorlight::renderer::{Quiet, Renderer};
 use sensorlight::scene::{Camera, Scene};
 use sensorlight::sensors::SensorKind;
@@ -36,6 +37,11 @@ fn open_floor() -> Scene {
     common::scene(groups, materials, camera, (40, 32))
 }
 
+/// Rec. 709 luminance, as the oracle weighs its lights.
+fn luminance(c: Vec3) -> f64 {
+    c.dot(LUMINANCE) as f64
+}
+
 /// R by the closed form at the sensor of every surface pixel (none for the background).
 fn closed_form(scene: &Scene, sensor: SensorKind, position: &[glam::Vec4], normal: &[glam::Vec4]) -> Vec<Option<f64>> {
     let domain = match sensor {
@@ -52,7 +58,6 @@ fn closed_form(scene: &Scene, sensor: SensorKind, position: &[glam::Vec4], norma
                 let receiver =
                     Receiver { origin: f.origin.as_dvec3(), t: f.t.as_dvec3(), b: f.b.as_dvec3(), n: f.n.as_dvec3() };
                 let mesh = &scene.mesh;
-                let luminance = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722)) as f64;
                 mesh.triangles
                     .iter()
                     .filter(|t| mesh.material_of(t.surface).is_emitter())
@@ -84,9 +89,8 @@ fn agrees_with_the_closed_form(sensor: SensorKind, rd: u32) {
         let Some(e) = e else { continue };
         let r = out.radiance[i];
         assert_eq!(r.w, SENSED, "pixel {i} is sensed");
-        let luminance = r.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722)) as f64;
         if *e > 1e-3 && g.emission[i].truncate().max_element() == 0.0 {
-            worst = worst.max((luminance - e).abs() / e);
+            worst = worst.max((luminance(r.truncate()) - e).abs() / e);
             compared += 1;
         }
     }
@@ -154,9 +158,9 @@ fn ten_thousand_emissive_triangles_are_summed_exactly() {
         if *e <= 1e-3 || g.emission[i].truncate().max_element() > 0.0 {
             continue;
         }
-        let luminance = |r: glam::Vec4| r.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722)) as f64;
-        worst.0 = worst.0.max((luminance(many.radiance[i]) - e).abs() / e);
-        worst.1 = worst.1.max((luminance(one.radiance[i]) - luminance(many.radiance[i])).abs() / e);
+        let (many_r, one_r) = (luminance(many.radiance[i].truncate()), luminance(one.radiance[i].truncate()));
+        worst.0 = worst.0.max((many_r - e).abs() / e);
+        worst.1 = worst.1.max((one_r - many_r).abs() / e);
         compared += 1;
     }
     let per_sensor = |s: &sensorlight::renderer::RenderStats| s.times.sensing_seconds / s.sensors as f64 * 1e3;

@@ -5,7 +5,7 @@ mod common;
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
-use sensorlight::light::polygon::{self, Domain, Receiver};
+use sensorlight::light::polygon::{self, Domain, Receiver, parallel_rectangle};
 use sensorlight::params::EstimatorParams;
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::scene::{Camera, ImageSize, Scene};
@@ -14,17 +14,6 @@ use sensorlight::sensors::{SensorKind, frame};
 
 fn params(sensor: SensorKind, epsilon: f32) -> EstimatorParams {
     EstimatorParams { sensor, epsilon, background: Vec3::ZERO }
-}
-
-/// Irradiance/π from a rectangle parallel to the receiver: the form factor from a differential area to a
-/// corner-aligned a × b rectangle at height h (Howell's catalogue, C-11), combined with signs.
-fn parallel_rectangle(x0: f64, x1: f64, y0: f64, y1: f64, h: f64) -> f64 {
-    let corner = |a: f64, b: f64| {
-        let (a, b) = (a / h, b / h);
-        let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
-        (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * PI)
-    };
-    corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0)
 }
 
 /// The sensor the oracle integrates for at `p` with normal `n`, in f64 for the closed forms.

@@ -120,14 +120,17 @@ def parse_floats(values: list[str], where: str) -> list[float]:
         raise SceneError(f"{where}: {e}") from None
 
 
-def load_mtl(path: Path, materials: dict[str, Material]) -> None:
-    current: Material | None = None
+def statements(path: Path):
+    """The statements of an OBJ or MTL file: (file:line, keyword, arguments), comments and blank lines left out."""
     for line_no, raw in enumerate(path.read_text().splitlines(), 1):
         words = raw.split("#", 1)[0].split()
-        if not words:
-            continue
-        where = f"{path}:{line_no}"
-        key, args = words[0], words[1:]
+        if words:
+            yield f"{path}:{line_no}", words[0], words[1:]
+
+
+def load_mtl(path: Path, materials: dict[str, Material]) -> None:
+    current: Material | None = None
+    for where, key, args in statements(path):
         if key == "newmtl":
             if not args:
                 raise SceneError(f"{where}: 'newmtl' needs a name")
@@ -177,12 +180,7 @@ def load_obj(path: Path) -> Mesh:
     mesh = Mesh()
     vertices: list[tuple[float, float, float]] = []
     material: str | None = None
-    for line_no, raw in enumerate(path.read_text().splitlines(), 1):
-        words = raw.split("#", 1)[0].split()
-        if not words:
-            continue
-        where = f"{path}:{line_no}"
-        key, args = words[0], words[1:]
+    for where, key, args in statements(path):
         if key == "v":
             values = parse_floats(args, where)
             if len(values) not in (3, 4, 6):

@@ -11,7 +11,7 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use crate::scene::{Aabb, Mesh, SurfaceId};
+use crate::scene::{Aabb, Mesh, SurfaceId, triangle_area};
 
 /// Most light groups a scene is gathered into: each costs a sensor two extra map layers.
 pub const MAX_GROUPS: usize = 8;
@@ -47,10 +47,6 @@ fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
-fn area(v: &[Vec3; 3]) -> f32 {
-    0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
-}
-
 impl Lights {
     /// The emitters of `mesh` (triangles whose material emits), gathered into groups.
     pub fn new(mesh: &Mesh) -> Self {
@@ -80,7 +76,7 @@ impl Lights {
                 for &i in &surfaces[id] {
                     let v = mesh.triangles[i].v;
                     v.iter().for_each(|&p| bounds.grow(p));
-                    power += luminance(ke) * area(&v);
+                    power += luminance(ke) * triangle_area(&v);
                     lights.emitters.push(Emitter { v, ke, group: g as u32 });
                 }
             }

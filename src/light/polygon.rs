@@ -131,6 +131,19 @@ pub fn lambert(vertices: &[DVec3], n: DVec3) -> f64 {
     0.5 * sum
 }
 
+/// Irradiance/π from a rectangle `[x0, x1] × [y0, y1]` at height `h`, parallel to the receiver and facing it
+/// (coordinates relative to the receiving point): the form factor of Howell's catalogue (C-11) for a
+/// corner-aligned rectangle, combined with signs. An independent closed form to check
+/// [`projected_solid_angle`] and the oracle against.
+pub fn parallel_rectangle(x0: f64, x1: f64, y0: f64, y1: f64, h: f64) -> f64 {
+    let corner = |a: f64, b: f64| {
+        let (a, b) = (a / h, b / h);
+        let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+        (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0)
+}
+
 #[cfg(test)]
 mod tests {
     use std::f64::consts::PI;
@@ -188,17 +201,6 @@ mod tests {
             }
         }
         PI * hits as f64 / (k * k) as f64
-    }
-
-    /// Irradiance/π from a rectangle `[x0, x1] × [y0, y1]` at height `h`, parallel to the receiver: the form
-    /// factor of Howell's catalogue (C-11) for a corner-aligned rectangle, combined with signs.
-    fn parallel_rectangle(x0: f64, x1: f64, y0: f64, y1: f64, h: f64) -> f64 {
-        let corner = |a: f64, b: f64| {
-            let (a, b) = (a / h, b / h);
-            let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
-            (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * PI)
-        };
-        corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0)
     }
 
     #[test]

@@ -39,7 +39,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::gbuffer;
-use super::lights::Lights;
+use super::lights::{LUMINANCE, Lights};
 use super::sampling::{ScrambledSobol, cosine_hemisphere, hash};
 use crate::gbuffer::GBufferData;
 use crate::params::EstimatorParams;
@@ -275,7 +275,7 @@ impl ReferenceImage {
 
     /// Mean relative standard error of `R` over the pixels where `R` is not negligible (luminance-weighted).
     pub fn relative_noise(&self) -> f32 {
-        let lum = |v: Vec4| v.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        let lum = |v: Vec4| v.truncate().dot(LUMINANCE);
         let peak = self.radiance.iter().map(|&r| lum(r)).fold(0.0, f32::max);
         let (sum, count) = self
             .radiance

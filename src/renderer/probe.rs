@@ -21,8 +21,7 @@ use crate::vk::Device;
 const PROBE_SIZE: ImageSize = ImageSize { width: 32, height: 32 };
 
 /// ε and background of the probe: non-zero, so that every part of `Ck` is exercised.
-const PROBE_FRAME: FrameParams =
-    FrameParams { epsilon: 0.2, background: Vec3::splat(0.05), tile: 1, dradiance: 0.0, filter_radius: 0 };
+const PROBE_FRAME: FrameParams = FrameParams::every_pixel(0.2, Vec3::splat(0.05));
 
 pub(crate) struct ProbeRenderer<'a> {
     device: &'a Arc<Device>,

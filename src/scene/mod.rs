@@ -223,6 +223,11 @@ impl Scene {
     }
 }
 
+/// The area of triangle `v`.
+pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
+    0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
+}
+
 impl Scene {
     /// A scene of the OBJ mesh at `path` alone: the camera frames it ([`auto_camera`]), the image is `image`,
     /// and the `[render]` table is empty (the defaults).
@@ -233,8 +238,7 @@ impl Scene {
         let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
         let front_area = |forward: Vec3| -> f32 {
-            let area = |t: &Triangle| 0.5 * (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length();
-            mesh.triangles.iter().map(|t| area(t) * (-t.normal.dot(forward)).max(0.0)).sum()
+            mesh.triangles.iter().map(|t| triangle_area(&t.v) * (-t.normal.dot(forward)).max(0.0)).sum()
         };
         let camera = auto_camera::frame(&mesh.bounds, image, front_area)
             .with_context(|| format!("{}: camera", path.display()))?;

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::gbuffer::GBufferData;
 use crate::light::groups::Lights;
 use crate::scene::bvh::Bvh;
-use crate::scene::{NO_SURFACE, Ray};
+use crate::scene::{NO_SURFACE, Ray, triangle_area};
 
 /// Points a group is probed at, at most.
 pub const POINTS_PER_GROUP: usize = 16;
@@ -35,8 +35,7 @@ pub fn light_points(lights: &Lights) -> Vec<LightPoint> {
     let mut points = Vec::new();
     for group in &lights.groups {
         let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
-        let areas: Vec<f32> =
-            emitters.iter().map(|e| 0.5 * (e.v[1] - e.v[0]).cross(e.v[2] - e.v[0]).length()).collect();
+        let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
         let total: f32 = areas.iter().sum();
         if total <= 0.0 {
             continue;

@@ -174,6 +174,16 @@ mod tests {
         }
     }
 
+    /// `request` chosen for hemicube sensors of rd 64 with the exact estimator and a 1 MiB budget.
+    fn choose_with(
+        fake: &mut Fake,
+        request: StrategyRequest,
+        cache: &mut Cache,
+        events: &mut dyn FnMut(Event),
+    ) -> Result<Choice> {
+        choose(fake, SensorKind::Hemicube, EstimatorKind::Exact, 64, 1 << 20, request, cache, events)
+    }
+
     #[test]
     fn auto_takes_the_fastest_strategy_that_passes_and_caches_both() {
         // Atlas is fastest but wrong; layered is the fastest correct one.
@@ -187,11 +197,7 @@ mod tests {
             probes: Vec::new(),
         };
         let (mut cache, mut events) = (Cache::in_memory(), Vec::new());
-        let sensor = SensorKind::Hemicube;
-        let exact = EstimatorKind::Exact;
-        let choice =
-            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |e| events.push(e))
-                .unwrap();
+        let choice = choose_with(&mut fake, StrategyRequest::Auto, &mut cache, &mut |e| events.push(e)).unwrap();
         assert_eq!(choice.strategy, StrategyKind::Layered);
         assert!(events.iter().any(|e| matches!(e, Event::Unsupported { strategy: StrategyKind::Multiview, .. })));
         assert!(
@@ -202,36 +208,17 @@ mod tests {
         assert!(fake.probes.contains(&(StrategyKind::Atlas, CHECK_RD, Some(CHECK_BATCH))), "checked on the probe");
         // A second choice comes from the cache: nothing is rendered.
         fake.probes.clear();
-        let again =
-            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
+        let again = choose_with(&mut fake, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
         assert_eq!(again.strategy, StrategyKind::Layered);
         assert!(fake.probes.is_empty(), "{:?}", fake.probes);
         // A named strategy that failed its (cached) check is refused with the reason.
-        let err = choose(
-            &mut fake,
-            sensor,
-            exact,
-            64,
-            1 << 20,
-            StrategyRequest::Fixed(StrategyKind::Atlas),
-            &mut cache,
-            &mut |_| (),
-        )
-        .unwrap_err()
-        .to_string();
+        let err = choose_with(&mut fake, StrategyRequest::Fixed(StrategyKind::Atlas), &mut cache, &mut |_| ())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("disagrees with per-sensor"), "{err}");
-        let err = choose(
-            &mut fake,
-            sensor,
-            exact,
-            64,
-            1 << 20,
-            StrategyRequest::Fixed(StrategyKind::Multiview),
-            &mut cache,
-            &mut |_| (),
-        )
-        .unwrap_err()
-        .to_string();
+        let err = choose_with(&mut fake, StrategyRequest::Fixed(StrategyKind::Multiview), &mut cache, &mut |_| ())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("cannot run") && err.contains("no multiview"), "{err}");
     }
 
@@ -249,14 +236,11 @@ mod tests {
             },
             probes: Vec::new(),
         };
-        let (sensor, exact) = (SensorKind::Hemicube, EstimatorKind::Exact);
         let mut cache = Cache::in_memory();
-        let auto =
-            choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
+        let auto = choose_with(&mut fake, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
         assert!(![StrategyKind::Layered, StrategyKind::Atlas].contains(&auto.strategy), "{auto:?}");
         for kind in [StrategyKind::Layered, StrategyKind::Atlas] {
-            let named =
-                choose(&mut fake, sensor, exact, 64, 1 << 20, StrategyRequest::Fixed(kind), &mut cache, &mut |_| ());
+            let named = choose_with(&mut fake, StrategyRequest::Fixed(kind), &mut cache, &mut |_| ());
             assert_eq!(named.unwrap().strategy, kind);
         }
     }

@@ -132,7 +132,7 @@ pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
     Setup {
         estimator: EstimatorParams { sensor, epsilon, background: Vec3::ZERO },
         rd,
-        frame: FrameParams { epsilon, background: Vec3::ZERO, tile: 1, dradiance: 0.0, filter_radius: 0 },
+        frame: FrameParams::every_pixel(epsilon, Vec3::ZERO),
     }
 }
 
