@@ -1,10 +1,16 @@
 #version 460
-// Cluster culling (docs/DESIGN.md §9): for every (cluster, sensor view) of a batch, keep the cluster if it
-// can be seen and is the right level of detail, and append a draw of it to that view's indirect commands.
-// Dropped: clusters wholly behind the sensor's tangent plane, outside the view's four side planes or one of
-// its clip planes, non-emitters in an emitters-only view, and clusters whose level is not the one selected
-// by `own error <= tau < parent error` (projected from the sensor; tau is half the view's centre texel).
-// CPU twin: passes::cull::keeps.
+// Cluster culling (docs/DESIGN.md §9): for every sensor view of a batch, walk the clusters' bounding tree
+// (clusters::tree) down from its root, one depth per dispatch, and append a draw of each cluster the view
+// keeps to that view's indirect commands.
+//
+// One invocation per (node, view) pair of depth `step`: step 0 takes the root for every view; later steps
+// take the pairs the step before queued. An inner node queues each child the view may keep something of;
+// a leaf tests its clusters. Dropped, for a cluster's sphere or a node's (which holds its clusters'): wholly
+// behind the sensor's tangent plane, outside the view's four side planes or one of its clip planes, not an
+// emitter in an emitters-only view; and clusters whose level is not the one selected by
+// `own error <= tau < parent error` (projected from the sensor; tau is half the view's centre texel), nodes
+// where no cluster below can be (their largest parent error projects to at most tau, or their smallest own
+// error to more). CPU twins: passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
 #include "types.glsl"
 
 layout(local_size_x = 64) in;
@@ -15,7 +21,16 @@ layout(std430, set = 0, binding = 2) readonly buffer Sensors { GpuSensor sensors
 layout(std430, set = 0, binding = 3) writeonly buffer Commands { GpuDrawCommand commands[]; };
 // counts[v]: the draws of view v; counts[views + v]: their triangles (statistics and tests).
 layout(std430, set = 0, binding = 4) buffer Counts { uint counts[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Nodes { GpuCullNode nodes[]; };
+// The clusters of the leaves, leaf by leaf.
+layout(std430, set = 0, binding = 6) readonly buffer Items { uint items[]; };
+// (node, view) pairs, depth by depth.
+layout(std430, set = 0, binding = 7) buffer Queue { uvec2 queue[]; };
+// Per depth: (pairs queued, workgroups to take them, 1, 1); yzw are a VkDispatchIndirectCommand.
+layout(std430, set = 0, binding = 8) buffer Walk { uvec4 walk[]; };
 layout(push_constant) uniform Push { CullPush push; };
+
+const uint GROUP = 64u;
 
 vec4 row(mat4 m, int i) {
     return vec4(m[0][i], m[1][i], m[2][i], m[3][i]);
@@ -26,6 +41,21 @@ bool outside(vec4 plane, vec4 sphere) {
     return dot(plane.xyz, sphere.xyz) + plane.w < -sphere.w * length(plane.xyz);
 }
 
+// Whether the view may see anything within `sphere` (of something flagged `flags`).
+bool sees(GpuSensorView view, GpuSensor s, vec4 sphere, uint flags) {
+    bool keep = dot(s.n.xyz, sphere.xyz - s.origin.xyz) >= -sphere.w;
+    keep = keep && ((view.flags & VIEW_EMITTERS_ONLY) == 0u || (flags & CLUSTER_EMITTER) != 0u);
+    for (int i = 0; i < 4; i++) {
+        keep = keep && !outside(view.clip[i], sphere);
+    }
+    mat4 m = view.view_proj;
+    vec4 w = row(m, 3);
+    for (int i = 0; i < 2; i++) {
+        keep = keep && !outside(w + row(m, i), sphere) && !outside(w - row(m, i), sphere);
+    }
+    return keep;
+}
+
 float projected(vec4 bounds, float error, vec3 eye) {
     if (error == 0.0) {
         return 0.0;
@@ -34,33 +64,57 @@ float projected(vec4 bounds, float error, vec3 eye) {
 }
 
 void main() {
-    uint c = gl_GlobalInvocationID.x;
-    uint v = gl_GlobalInvocationID.y;
-    if (c >= push.clusters || v >= push.views) {
-        return;
+    uint node;
+    uint v;
+    if (push.step == 0u) {
+        v = gl_GlobalInvocationID.x;
+        node = push.root;
+        if (v >= push.views) {
+            return;
+        }
+    } else {
+        uint i = gl_GlobalInvocationID.x;
+        if (i >= min(walk[push.step].x, push.in_capacity)) {
+            return;
+        }
+        uvec2 pair = queue[push.in_base + i];
+        node = pair.x;
+        v = pair.y;
     }
-    GpuCluster k = clusters[c];
     GpuSensorView view = views[v];
     GpuSensor s = sensors[v / push.per_sensor];
     vec3 eye = s.origin.xyz;
-    bool keep = dot(s.n.xyz, k.sphere.xyz - eye) >= -k.sphere.w;
-    keep = keep && ((view.flags & VIEW_EMITTERS_ONLY) == 0u || (k.flags & CLUSTER_EMITTER) != 0u);
-    for (int i = 0; i < 4; i++) {
-        keep = keep && !outside(view.clip[i], k.sphere);
-    }
     mat4 m = view.view_proj;
-    vec4 w = row(m, 3);
-    for (int i = 0; i < 2; i++) {
-        keep = keep && !outside(w + row(m, i), k.sphere) && !outside(w - row(m, i), k.sphere);
+    float tau = 1.0 / (float(push.rd) * max(length(row(m, 0).xyz), length(row(m, 1).xyz)));
+    GpuCullNode here = nodes[node];
+    if ((here.flags & NODE_LEAF) != 0u) {
+        for (uint j = 0u; j < here.count; j++) {
+            GpuCluster k = clusters[items[here.first + j]];
+            bool keep = sees(view, s, k.sphere, k.flags) && projected(k.own, k.errors.x, eye) <= tau
+                && projected(k.parent, k.errors.y, eye) > tau;
+            if (keep) {
+                uint slot = atomicAdd(counts[v], 1u);
+                atomicAdd(counts[push.views + v], k.index_count / 3u);
+                if (slot < push.max_per_view) {
+                    commands[v * push.max_per_view + slot] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
+                }
+            }
+        }
+        return;
     }
-    float scale = max(length(row(m, 0).xyz), length(row(m, 1).xyz));
-    float tau = 1.0 / (float(push.rd) * scale);
-    keep = keep && projected(k.own, k.errors.x, eye) <= tau && projected(k.parent, k.errors.y, eye) > tau;
-    if (keep) {
-        uint slot = atomicAdd(counts[v], 1u);
-        atomicAdd(counts[push.views + v], k.index_count / 3u);
-        if (slot < push.max_per_view) {
-            commands[v * push.max_per_view + slot] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
+    for (uint j = 0u; j < here.count; j++) {
+        uint child = here.first + j;
+        GpuCullNode c = nodes[child];
+        // TreeNode::may_select: the largest parent error too coarse somewhere, the smallest own error fine.
+        bool keep = sees(view, s, c.sphere, c.flags)
+            && c.errors.y / max(distance(c.parent.xyz, eye) - c.parent.w, push.near) > tau
+            && c.errors.x / max(distance(c.own.xyz, eye) + c.own.w, push.near) <= tau;
+        if (keep) {
+            uint slot = atomicAdd(walk[push.step + 1u].x, 1u);
+            if (slot < push.out_capacity) {
+                queue[push.out_base + slot] = uvec2(child, v);
+                atomicMax(walk[push.step + 1u].y, slot / GROUP + 1u);
+            }
         }
     }
 }

@@ -22,6 +22,7 @@ layout(std430, set = 0, binding = 13) buffer EmitterPushes { EmitterPush emitter
 layout(std430, set = 0, binding = 14) buffer Clusters { GpuCluster clusters[]; };
 layout(std430, set = 0, binding = 15) buffer Commands { GpuDrawCommand commands[]; };
 layout(std430, set = 0, binding = 16) buffer CullPushes { CullPush cull_pushes[]; };
+layout(std430, set = 0, binding = 17) buffer CullNodes { GpuCullNode cull_nodes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -42,4 +43,5 @@ void main() {
     clusters[1] = clusters[0];
     commands[1] = commands[0];
     cull_pushes[1] = cull_pushes[0];
+    cull_nodes[1] = cull_nodes[0];
 }

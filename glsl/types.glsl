@@ -126,7 +126,20 @@ struct GpuCluster {
     uint _pad;
 };
 
+// One node of the clusters' bounding tree (clusters::TreeNode flattened).
+struct GpuCullNode {
+    vec4 sphere;  // holds every cluster's bounding sphere below
+    vec4 own;     // holds their own bounds' spheres (smallest own error in errors.x)
+    vec4 parent;  // holds their parent bounds' spheres (largest parent error in errors.y)
+    vec4 errors;
+    uint first;  // first child node, or with NODE_LEAF first leaf item
+    uint count;
+    uint flags;  // CLUSTER_EMITTER (an emitter below) | NODE_LEAF
+    uint _pad;
+};
+
 const uint CLUSTER_EMITTER = 1u;
+const uint NODE_LEAF = 2u;
 
 // VkDrawIndexedIndirectCommand.
 struct GpuDrawCommand {
@@ -138,13 +151,17 @@ struct GpuDrawCommand {
 };
 
 struct CullPush {
-    uint clusters;
     uint views;
     uint per_sensor;
     uint max_per_view;
     uint rd;
     float near;
-    uint _pad[2];
+    uint root;
+    uint step;
+    uint in_base;
+    uint out_base;
+    uint out_capacity;
+    uint in_capacity;
+    uint _pad;
 };
-
 #endif

@@ -9,10 +9,10 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Vec3, Vec4};
 
-use crate::clusters::{ClusterMesh, ErrorBounds, max_selected};
+use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
 use crate::gpu_types::{
-    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS,
-    Vertex,
+    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuCullNode, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface,
+    MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene};
@@ -45,6 +45,11 @@ pub struct GpuClusters {
     /// `GpuCluster` each.
     pub clusters: Arc<Buffer>,
     pub count: u32,
+    /// Their bounding tree (`clusters::CullTree`): `GpuCullNode`s, the leaves' cluster indices, and its
+    /// shape, which the culling pass walks.
+    pub nodes: Arc<Buffer>,
+    pub items: Arc<Buffer>,
+    pub tree: TreeShape,
     /// No view selects more clusters than this (`clusters::max_selected`): the draw slots per view.
     pub max_per_view: u32,
     /// Triangles of the mesh itself (the finest level).
@@ -53,7 +58,9 @@ pub struct GpuClusters {
 
 impl GpuClusters {
     pub fn upload(device: &Arc<Device>, mesh: &Mesh, hierarchy: &ClusterMesh) -> Result<Self> {
-        let clusters = gpu_clusters(hierarchy, |s| mesh.material_of(s).is_emitter());
+        let emitter = |s| mesh.material_of(s).is_emitter();
+        let clusters = gpu_clusters(hierarchy, emitter);
+        let tree = CullTree::build(hierarchy, emitter);
         let vertices: Vec<Vertex> = hierarchy
             .positions
             .iter()
@@ -76,6 +83,9 @@ impl GpuClusters {
             )?),
             clusters: Arc::new(transfer::upload(device, "clusters", &clusters, storage)?),
             count: clusters.len() as u32,
+            nodes: Arc::new(transfer::upload(device, "cluster tree", &gpu_cull_nodes(&tree), storage)?),
+            items: Arc::new(transfer::upload(device, "cluster tree leaves", &tree.items, storage)?),
+            tree: TreeShape { root: tree.root, per_depth: tree.per_depth.clone() },
             max_per_view: max_selected(hierarchy) as u32,
             full_detail_triangles: hierarchy.full_detail_triangles() as u64,
         })
@@ -96,6 +106,44 @@ pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Ve
             first_index: k.first_index,
             index_count: k.index_count,
             flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
+            _pad: 0,
+        })
+        .collect()
+}
+
+/// The shape of the tree walked: its root and how many nodes lie at each depth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TreeShape {
+    pub root: u32,
+    pub per_depth: Vec<u32>,
+}
+
+impl TreeShape {
+    /// Bytes of queue the culling pass's walk needs for a batch of `views` views: a (node, view) pair of
+    /// 8 bytes for each view and node below the root (each is queued at most once).
+    pub fn queue_bytes(&self, views: u64) -> u64 {
+        (8 * views * self.per_depth.iter().skip(1).map(|&n| n as u64).sum::<u64>()).max(8)
+    }
+
+    /// Bytes of the walk's counts: a `uvec4` per depth.
+    pub fn walk_bytes(&self) -> u64 {
+        16 * self.per_depth.len() as u64
+    }
+}
+
+/// The clusters' bounding tree as the culling pass reads it.
+pub fn gpu_cull_nodes(tree: &CullTree) -> Vec<GpuCullNode> {
+    let bounds = |b: &ErrorBounds| Vec3::from(b.center).extend(b.radius);
+    tree.nodes
+        .iter()
+        .map(|n| GpuCullNode {
+            sphere: Vec4::from(n.sphere),
+            own: bounds(&n.own),
+            parent: bounds(&n.parent),
+            errors: Vec4::new(n.own.error, n.parent.error, 0.0, 0.0),
+            first: n.first,
+            count: n.count,
+            flags: if n.emitter { CLUSTER_EMITTER } else { 0 } | if n.leaf { NODE_LEAF } else { 0 },
             _pad: 0,
         })
         .collect()

@@ -253,8 +253,30 @@ pub struct GpuCluster {
     pub _pad: u32,
 }
 
-/// A cluster of an emitter: the only ones an emitters-only view keeps.
+/// A cluster of an emitter (of a node: with an emitter below): the only ones an emitters-only view keeps.
 pub const CLUSTER_EMITTER: u32 = 1;
+/// A node whose children are clusters (`GpuCullNode::first` indexes the leaf items).
+pub const NODE_LEAF: u32 = 2;
+
+/// One node of the clusters' bounding tree as the culling pass reads it (`crate::clusters::TreeNode`
+/// flattened; the same shape as [`GpuCluster`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCullNode {
+    /// Holds every cluster's bounding sphere below: centre, radius.
+    pub sphere: Vec4,
+    /// Spheres holding every cluster's own bounds and parent bounds; the errors in `errors`.
+    pub own: Vec4,
+    pub parent: Vec4,
+    /// x: the smallest own error below, y: the largest parent error; zw unused.
+    pub errors: Vec4,
+    /// Its first child (a node, or with [`NODE_LEAF`] a leaf item) and how many.
+    pub first: u32,
+    pub count: u32,
+    /// [`CLUSTER_EMITTER`] (an emitter below) | [`NODE_LEAF`].
+    pub flags: u32,
+    pub _pad: u32,
+}
 
 /// `VkDrawIndexedIndirectCommand`, as the culling pass writes it.
 #[repr(C)]
@@ -268,11 +290,10 @@ pub struct GpuDrawCommand {
     pub first_instance: u32,
 }
 
-/// Push constants of the culling pass.
+/// Push constants of one step of the culling pass's walk down the bounding tree.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CullPush {
-    pub clusters: u32,
     pub views: u32,
     /// Views per sensor: view `v` belongs to sensor `v / per_sensor`.
     pub per_sensor: u32,
@@ -282,5 +303,14 @@ pub struct CullPush {
     pub rd: u32,
     /// Distances below this count as this (the views' near plane).
     pub near: f32,
-    pub _pad: [u32; 2],
+    /// The tree's root node: step 0 enters it for every view.
+    pub root: u32,
+    /// The depth this step takes its (node, view) pairs from; it queues their children at `step + 1`.
+    pub step: u32,
+    /// Where in the queue the pairs of depth `step` start and those of `step + 1`, and how many fit at each.
+    pub in_base: u32,
+    pub out_base: u32,
+    pub out_capacity: u32,
+    pub in_capacity: u32,
+    pub _pad: u32,
 }

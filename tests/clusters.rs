@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use common::meshes::scene;
 use glam::Vec3;
-use sensorlight::clusters::{self, Cluster, ClusterMesh, cache, selected};
+use sensorlight::clusters::{self, Cluster, ClusterMesh, CullTree, cache, selected, tree};
 use sensorlight::scene::SurfaceId;
 
 /// A triangle by its corners' bits, rotated so that the smallest corner comes first (orientation kept).
@@ -132,6 +132,50 @@ fn no_selection_takes_more_clusters_than_the_bound() {
         }
     }
     assert_eq!(most, full, "the finest level is the largest selection here");
+}
+
+/// The bounding tree's walk selects exactly what testing every cluster selects, from near and far, at
+/// every threshold, testing a few clusters per cluster it selects; every cluster is in exactly one leaf.
+#[test]
+fn the_tree_walk_selects_what_testing_every_cluster_selects() {
+    let mesh = scene();
+    let c = clusters::build(&mesh);
+    let tree = CullTree::build(&c, |s| mesh.material_of(s).is_emitter());
+    let mut items = tree.items.clone();
+    items.sort_unstable();
+    assert_eq!(items, (0..c.clusters.len() as u32).collect::<Vec<_>>(), "each cluster in one leaf");
+    assert_eq!(tree.per_depth.iter().sum::<u32>() as usize, tree.nodes.len());
+    assert!(tree.depth() <= 8, "a shallow tree: depth {}", tree.depth());
+    for (i, n) in tree.nodes.iter().enumerate() {
+        let count = n.count as usize;
+        assert!(if n.leaf { count <= tree::LEAF } else { count >= 1 }, "node {i}: {n:?}");
+    }
+    let near = 1e-4;
+    let (mut tested, mut taken, mut all) = (0usize, 0usize, 0usize);
+    for eye in [Vec3::new(0.0, 0.0, 1.001), Vec3::new(0.0, -1.4, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::splat(40.0)] {
+        for tau in [0.0, 1e-4, 1e-3, 1.0 / 128.0, 3e-2, 0.1, 1.0, 100.0] {
+            let count = std::cell::Cell::new(0usize);
+            let mut walked = tree.select(
+                |n| n.may_select(eye, near, tau),
+                |k| {
+                    count.set(count.get() + 1);
+                    selected(&c.clusters[k as usize], eye, near, tau)
+                },
+            );
+            walked.sort_unstable();
+            let every: Vec<u32> =
+                (0..c.clusters.len() as u32).filter(|&k| selected(&c.clusters[k as usize], eye, near, tau)).collect();
+            assert_eq!(walked, every, "eye {eye}, τ {tau}");
+            tested += count.get();
+            taken += every.len();
+            all += c.clusters.len();
+        }
+    }
+    // The walk's work follows what it selects (here about 2×), not the hierarchy's size.
+    assert!(
+        tested <= 3 * taken && tested * 2 < all,
+        "the walk tested {tested} clusters to select {taken}; testing each would test {all}"
+    );
 }
 
 #[test]

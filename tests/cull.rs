@@ -1,5 +1,6 @@
-//! The cluster culling pass (glsl/cull.comp) read back against its CPU twin (`passes::cull::keeps`), on a
-//! batch of hemicube sensors with a light group (main views, a zoom pair) around a simplified sphere.
+//! The cluster culling pass (glsl/cull.comp), which walks the clusters' bounding tree, read back against
+//! its CPU twin (`passes::cull::keeps`, every cluster tested), on a batch of hemicube sensors with a light
+//! group (main views, a zoom pair) around a simplified sphere.
 
 mod common;
 
@@ -7,8 +8,10 @@ use ash::vk;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use sensorlight::clusters;
+use sensorlight::clusters::CullTree;
+use sensorlight::gpu_scene::TreeShape;
 use sensorlight::gpu_types::{CullPush, GpuDrawCommand};
-use sensorlight::passes::cull::{CullBindings, CullPass, gpu_clusters, keeps};
+use sensorlight::passes::cull::{CullBindings, CullPass, gpu_clusters, gpu_cull_nodes, keeps};
 use sensorlight::scene::Aabb;
 use sensorlight::sensors::SensorKind;
 use sensorlight::sensors::frame::SensorFrame;
@@ -20,7 +23,11 @@ use sensorlight::vk::{Buffer, transfer};
 fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
     let mesh = common::meshes::scene();
     let hierarchy = clusters::build(&mesh);
-    let gpu = gpu_clusters(&hierarchy, |s| mesh.material_of(s).is_emitter());
+    let emitter = |s| mesh.material_of(s).is_emitter();
+    let gpu = gpu_clusters(&hierarchy, emitter);
+    let tree = CullTree::build(&hierarchy, emitter);
+    let shape = TreeShape { root: tree.root, per_depth: tree.per_depth.clone() };
+    assert!(tree.depth() >= 2, "a walk of several steps: depth {}", tree.depth());
     // Sensors on the floor, on the sphere, and far away on a wall; the lamp is the one light group.
     let frames = [
         SensorFrame::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y, 1e-3),
@@ -36,13 +43,12 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
     let views = batch.views.len();
     let max_per_view = gpu.len() as u32;
     let push = CullPush {
-        clusters: gpu.len() as u32,
         views: views as u32,
         per_sensor: batch.per_sensor as u32,
         max_per_view,
         rd,
         near,
-        _pad: [0; 2],
+        ..Default::default()
     };
     let (counts, commands) = common::gpu(|device| {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -60,13 +66,23 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
             MemoryLocation::GpuOnly,
         )
         .unwrap();
-        let pass = CullPass::new(device, 1).unwrap();
+        let nodes = transfer::upload(device, "nodes", &gpu_cull_nodes(&tree), storage).unwrap();
+        let items = transfer::upload(device, "items", &tree.items, storage).unwrap();
+        let local = MemoryLocation::GpuOnly;
+        let queue = Buffer::new(device, "queue", shape.queue_bytes(views as u64), storage, local).unwrap();
+        let walk_usage = out | vk::BufferUsageFlags::TRANSFER_DST;
+        let walk = Buffer::new(device, "walk", shape.walk_bytes(), walk_usage, local).unwrap();
+        let pass = CullPass::new(device, 1, shape.clone()).unwrap();
         let bindings = CullBindings {
             clusters: &clusters,
+            nodes: &nodes,
+            items: &items,
             views: &view_buffer,
             sensors: &sensors,
             commands: &commands,
             counts: &counts,
+            queue: &queue,
+            walk: &walk,
         };
         pass.bind(device, 0, &bindings);
         device
@@ -76,7 +92,7 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
                     &[sensorlight::vk::Access::TransferWrite],
                     &[sensorlight::vk::Access::ComputeRead],
                 );
-                pass.record(enc, 0, &counts, None, &push);
+                pass.record(enc, 0, (&counts, &walk), None, &push);
                 Ok(())
             })
             .unwrap();

@@ -5,8 +5,9 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    CullPush, EmitterPush, GBufferPush, GpuCluster, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup,
-    GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
+    CullPush, EmitterPush, GBufferPush, GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk,
+    GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush,
+    SensorPush,
 };
 use sensorlight::shaders;
 
@@ -108,7 +109,25 @@ fn shared_structs_match_glsl() {
             "GpuDrawCommand",
             rust_layout!(GpuDrawCommand: index_count, instance_count, first_index, vertex_offset, first_instance),
         ),
-        (16, "CullPush", rust_layout!(CullPush: clusters, views, per_sensor, max_per_view, rd, near, _pad)),
+        (
+            16,
+            "CullPush",
+            rust_layout!(
+                CullPush: views,
+                per_sensor,
+                max_per_view,
+                rd,
+                near,
+                root,
+                step,
+                in_base,
+                out_base,
+                out_capacity,
+                in_capacity,
+                _pad
+            ),
+        ),
+        (17, "GpuCullNode", rust_layout!(GpuCullNode: sphere, own, parent, errors, first, count, flags, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

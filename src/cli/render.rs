@@ -185,7 +185,10 @@ fn print_details(s: &RenderStats) {
     );
     let t = &s.times;
     let gpu = match (t.gpu_maps_seconds, t.gpu_reduction_seconds) {
-        (Some(maps), Some(reduction)) => format!("GPU {maps:.2} s sensor maps + {reduction:.2} s reduction"),
+        (Some(maps), Some(reduction)) => {
+            let cull = t.gpu_cull_seconds.map_or(String::new(), |c| format!("{c:.2} s culling + "));
+            format!("GPU {cull}{maps:.2} s sensor maps + {reduction:.2} s reduction")
+        }
         _ => "no GPU timestamps".into(),
     };
     sensorlight::errln!(

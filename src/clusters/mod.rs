@@ -11,17 +11,20 @@
 //!
 //! Surfaces are simplified apart (a cluster never mixes surface ids, and a surface's border is locked, so
 //! surfaces still meet), and emitters are never simplified: their clusters are full detail at every
-//! threshold. Built hierarchies are cached per mesh ([`cache`]).
+//! threshold. Built hierarchies are cached per mesh ([`cache`]). A bounding tree over the clusters
+//! ([`tree`]) lets a viewpoint's selection skip whole regions and levels that it cannot take from.
 
 pub mod build;
 pub mod cache;
 pub mod select;
+pub mod tree;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 pub use build::{BUILD_VERSION, MAX_TRIANGLES, build};
 pub use select::{max_selected, projected_error, selected};
+pub use tree::{CullTree, TreeNode};
 
 /// A bounding sphere and the object-space error of the geometry it bounds (meshoptimizer's `clodBounds`).
 #[repr(C)]

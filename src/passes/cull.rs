@@ -1,12 +1,22 @@
 //! Cluster culling pass (docs/DESIGN.md §9): per batch, for every sensor view, the clusters of the LOD
 //! hierarchy it sees at the level of detail its texels need, written as indexed indirect draws (one list
 //! per view, `max_per_view` slots each, and a count per view: `vkCmdDrawIndexedIndirectCount` reads them,
-//! so the host records the same work whatever the scene). Shader: `glsl/cull.comp`, one invocation per
-//! (cluster, view). CPU twin: [`keeps`].
+//! so the host records the same work whatever the scene). Shader: `glsl/cull.comp`. CPU twin: [`keeps`].
 //!
-//! A view's count may exceed `max_per_view`: the commands past it are not written, and the count says so.
-//! The batch runner sizes `max_per_view` by `clusters::max_selected`, so that this cannot happen, and
-//! checks every count it reads back.
+//! It walks the clusters' bounding tree (`clusters::tree`) one depth per dispatch, so that a view's cost
+//! follows what it selects rather than the hierarchy's size; each step queues the (node, view) pairs of the
+//! next depth and counts the workgroups to take them, which the next step's indirect dispatch reads:
+//!
+//! ```text
+//!   walk:  depth 0       depth 1        depth 2        …   (uvec4 each: pairs queued, groups, 1, 1)
+//!   queue: [ depth 1: views × nodes(1) ][ depth 2: views × nodes(2) ] …   ((node, view) pairs)
+//!   step 0: the root, every view ─▶ depth 1;  step d: depth d ─▶ depth d + 1 (leaves: draws)
+//! ```
+//!
+//! Each (node, view) pair is queued at most once, so a depth's region holds all it can receive. A view's
+//! draw count may exceed `max_per_view`: the commands past it are not written, and the count says so. The
+//! batch runner sizes `max_per_view` by `clusters::max_selected`, so that this cannot happen, and checks
+//! every count it reads back.
 //!
 //! After the `views` draw counts, the counts buffer holds each view's triangles drawn (statistics, tests).
 
@@ -16,15 +26,19 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Mat4, Vec4, Vec4Swizzles as _};
 
+use crate::gpu_scene::TreeShape;
 use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
 use crate::shaders;
 use crate::vk::{Access, Buffer, ComputeKernel, Device, Encoder, barrier, compute::groups_for};
 
 const GROUP: u32 = 64;
 
-/// What one culling dispatch reads and writes.
+/// What one culling pass reads and writes.
 pub struct CullBindings<'a> {
     pub clusters: &'a Buffer,
+    /// The bounding tree: `GpuCullNode`s, and the leaves' cluster indices.
+    pub nodes: &'a Buffer,
+    pub items: &'a Buffer,
     pub views: &'a Buffer,
     pub sensors: &'a Buffer,
     /// `views × max_per_view` `GpuDrawCommand`s (usage: storage and indirect).
@@ -32,19 +46,24 @@ pub struct CullBindings<'a> {
     /// Two `u32` per view: draws, then triangles (usage: storage, indirect and transfer destination: it is
     /// cleared here).
     pub counts: &'a Buffer,
+    /// The walk's scratch: `TreeShape::queue_bytes` and `TreeShape::walk_bytes` (usage: storage; the walk
+    /// also indirect and transfer destination).
+    pub queue: &'a Buffer,
+    pub walk: &'a Buffer,
 }
 
 pub struct CullPass {
     kernel: ComputeKernel,
+    tree: TreeShape,
 }
 
 impl CullPass {
     /// `sets`: one per batch in flight.
-    pub fn new(device: &Arc<Device>, sets: u32) -> Result<Self> {
+    pub fn new(device: &Arc<Device>, sets: u32, tree: TreeShape) -> Result<Self> {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let bindings: Vec<_> = (0..5).map(|b| (b, storage)).collect();
+        let bindings: Vec<_> = (0..9).map(|b| (b, storage)).collect();
         let kernel = ComputeKernel::new(device, shaders::CULL_COMP, &bindings, size_of::<CullPush>() as u32, sets)?;
-        Ok(Self { kernel })
+        Ok(Self { kernel, tree })
     }
 
     /// Binds set `set` (call while its work is not in flight).
@@ -56,17 +75,22 @@ impl CullPass {
             .storage_buffer(2, b.sensors)
             .storage_buffer(3, b.commands)
             .storage_buffer(4, b.counts)
+            .storage_buffer(5, b.nodes)
+            .storage_buffer(6, b.items)
+            .storage_buffer(7, b.queue)
+            .storage_buffer(8, b.walk)
             .apply(device);
     }
 
-    /// Records: clear the counts, cull, and make the commands and counts visible to indirect draws.
-    /// `zero_commands`: also clear every command first, for draws that read all `max_per_view` of a view
-    /// (no `drawIndirectCount`): the unused ones then draw nothing.
+    /// Records: clear the counts and the walk, walk the tree one depth per dispatch, and make the commands
+    /// and counts visible to indirect draws. `push` gives the batch's views and selection; the walk's own
+    /// fields are filled in here. `zero_commands`: also clear every command first, for draws that read all
+    /// `max_per_view` of a view (no `drawIndirectCount`): the unused ones then draw nothing.
     pub fn record(
         &self,
         enc: &Encoder<'_>,
         set: usize,
-        counts: &Buffer,
+        (counts, walk): (&Buffer, &Buffer),
         zero_commands: Option<&Buffer>,
         push: &CullPush,
     ) {
@@ -75,40 +99,70 @@ impl CullPass {
         if let Some(commands) = zero_commands {
             enc.fill(commands, 0);
         }
+        let depths = self.tree.per_depth.len();
+        let start: Vec<u32> = (0..depths).flat_map(|_| [0, 0, 1, 1]).collect();
+        enc.update(walk, &start);
         barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
-        let groups = [groups_for(push.clusters, GROUP), push.views, 1];
-        if push.clusters > 0 && push.views > 0 {
-            self.kernel.dispatch(enc, set, push, groups);
+        // Where each depth's pairs start in the queue (depth 0, the root, is not queued).
+        let capacity = |d: usize| push.views * self.tree.per_depth.get(d).copied().unwrap_or(0);
+        let mut base = vec![0u32; depths + 1];
+        for d in 1..depths {
+            base[d + 1] = base[d] + capacity(d);
+        }
+        for step in 0..depths {
+            let push = CullPush {
+                root: self.tree.root,
+                step: step as u32,
+                in_base: base[step],
+                out_base: base[step + 1],
+                in_capacity: if step == 0 { push.views } else { capacity(step) },
+                out_capacity: capacity(step + 1),
+                ..*push
+            };
+            if step == 0 {
+                self.kernel.dispatch(enc, set, &push, [groups_for(push.views, GROUP), 1, 1]);
+            } else {
+                barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite, Access::IndirectRead]);
+                self.kernel.dispatch_indirect(enc, set, &push, (walk, 16 * step as u64 + 4));
+            }
         }
         barrier::global(enc, &[Access::ComputeWrite], &[Access::IndirectRead]);
     }
 }
 
-/// The CPU twin of `glsl/cull.comp`: whether `view` (of `sensor`) draws `cluster`.
+/// The CPU twin of `glsl/cull.comp`: whether `view` (of `sensor`) draws `cluster`. The walk keeps exactly
+/// these: it enters a node only where this could hold for a cluster below.
 pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd: u32, near: f32) -> bool {
     let eye = sensor.origin.xyz();
-    let sphere = cluster.sphere;
+    let tau = accepted_error(view, rd);
+    let projected = |bounds: Vec4, error: f32| {
+        if error == 0.0 { 0.0 } else { error / (bounds.xyz().distance(eye) - bounds.w).max(near) }
+    };
+    sees(view, sensor, cluster.sphere, cluster.flags)
+        && projected(cluster.own, cluster.errors.x) <= tau
+        && projected(cluster.parent, cluster.errors.y) > tau
+}
+
+/// Whether `view` may see anything within `sphere` (of something flagged `flags`): not wholly behind the
+/// sensor's tangent plane, outside the view's side or clip planes, or (in an emitters-only view) no emitter.
+pub fn sees(view: &GpuSensorView, sensor: &GpuSensor, sphere: Vec4, flags: u32) -> bool {
     let outside = |plane: Vec4| plane.xyz().dot(sphere.xyz()) + plane.w < -sphere.w * plane.xyz().length();
-    if sensor.n.xyz().dot(sphere.xyz() - eye) < -sphere.w {
+    if sensor.n.xyz().dot(sphere.xyz() - sensor.origin.xyz()) < -sphere.w {
         return false;
     }
-    if view.flags & VIEW_EMITTERS_ONLY != 0 && cluster.flags & CLUSTER_EMITTER == 0 {
-        return false;
-    }
-    if view.clip.iter().any(|&p| outside(p)) {
+    if view.flags & VIEW_EMITTERS_ONLY != 0 && flags & CLUSTER_EMITTER == 0 {
         return false;
     }
     let m: Mat4 = view.view_proj;
     let (r0, r1, w) = (m.row(0), m.row(1), m.row(3));
-    if [w + r0, w - r0, w + r1, w - r1].into_iter().any(outside) {
-        return false;
-    }
-    let tau = 1.0 / (rd as f32 * r0.xyz().length().max(r1.xyz().length()));
-    let projected = |bounds: Vec4, error: f32| {
-        if error == 0.0 { 0.0 } else { error / (bounds.xyz().distance(eye) - bounds.w).max(near) }
-    };
-    projected(cluster.own, cluster.errors.x) <= tau && projected(cluster.parent, cluster.errors.y) > tau
+    !view.clip.iter().any(|&p| outside(p)) && ![w + r0, w - r0, w + r1, w - r1].into_iter().any(outside)
 }
 
-/// The clusters as the pass reads them (defined beside the buffers it fills).
-pub use crate::gpu_scene::gpu_clusters;
+/// The error (radians) a view accepts: half its centre texel, `1 / (rd · scale)`.
+pub fn accepted_error(view: &GpuSensorView, rd: u32) -> f32 {
+    let m: Mat4 = view.view_proj;
+    1.0 / (rd as f32 * m.row(0).xyz().length().max(m.row(1).xyz().length()))
+}
+
+/// The clusters and their tree as the pass reads them (defined beside the buffers they fill).
+pub use crate::gpu_scene::{gpu_clusters, gpu_cull_nodes};

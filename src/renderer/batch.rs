@@ -7,9 +7,9 @@
 //!   device:                  [maps b0 | reduce b0][maps b1 | reduce b1][maps b2 | reduce b2] …
 //! ```
 //!
-//! A batch is recorded as [culling →] sensor maps (the strategy) → barrier → reduction, which writes each sensor's R
-//! into the radiance map and into the slot's results, which the host reads when the slot is next waited
-//! on: a round of refinement reads back exactly the values it sensed, nothing more. When the scene is drawn
+//! A batch is recorded as [culling →] [emitters →] sensor maps (the strategy) → barrier → reduction, which
+//! writes each sensor's R into the radiance map and into the slot's results, which the host reads when the
+//! slot is next waited on: a round of refinement reads back exactly the values it sensed, nothing more. When the scene is drawn
 //! from its clusters, the culling pass first writes each view's draw list into the slot (compute write →
 //! indirect read), and the runner reads back each view's count with the results.
 
@@ -35,8 +35,9 @@ use crate::sensors::views::BatchViews;
 use crate::strategy::StrategyKind;
 use crate::vk::{Access, Buffer, CommandSlot, Device, TimestampQueries, barrier};
 
-/// Timestamps per batch: start, sensor maps done, reduction done.
-const TIMESTAMPS: u32 = 3;
+/// Timestamps per batch: start, culling done (at once where nothing is culled), sensor maps done, reduction
+/// done.
+const TIMESTAMPS: u32 = 4;
 
 /// What the batches of a render cost, split between host and device.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -46,8 +47,9 @@ pub struct BatchTimes {
     pub host_record: Duration,
     /// Host: waiting for batches to complete.
     pub host_wait: Duration,
-    /// Device, by timestamp queries: the sensor maps and the reduction. `None` where the device cannot
-    /// write timestamps.
+    /// Device, by timestamp queries: the culling pass (`None` also where nothing is culled), the sensor maps
+    /// (the emitter pass included) and the reduction. `None` where the device cannot write timestamps.
+    pub gpu_cull: Option<Duration>,
     pub gpu_maps: Option<Duration>,
     pub gpu_reduction: Option<Duration>,
     /// Bytes read back to the host (each batch's results).
@@ -76,11 +78,10 @@ struct Slot {
     in_flight: Vec<u32>,
 }
 
-/// The culling pass and the clusters it reads, when the maps are drawn from them.
+/// The culling pass and the clusters and tree it reads, when the maps are drawn from them.
 struct Culling {
     pass: CullPass,
-    clusters: Arc<Buffer>,
-    count: u32,
+    reads: [Arc<Buffer>; 3],
 }
 
 pub(crate) struct BatchRunner {
@@ -162,19 +163,23 @@ impl BatchRunner {
         // The strategy draws from the clusters (its slots have draw lists) only if the scene has them.
         let culling = match (&scene.clusters, slots[0].maps.draws()) {
             (Some(c), Some(_)) => {
-                let pass = CullPass::new(device, in_flight)?;
+                let pass = CullPass::new(device, in_flight, c.tree.clone())?;
                 for (i, slot) in slots.iter().enumerate() {
                     let draws = slot.maps.draws().context("every slot of a culled strategy has draw lists")?;
                     let bindings = CullBindings {
                         clusters: &c.clusters,
+                        nodes: &c.nodes,
+                        items: &c.items,
                         views: slot.maps.views(),
                         sensors: &slot.sensors,
                         commands: &draws.commands,
                         counts: &draws.counts,
+                        queue: &draws.queue,
+                        walk: &draws.walk,
                     };
                     pass.bind(device, i, &bindings);
                 }
-                Some(Culling { pass, clusters: c.clusters.clone(), count: c.count })
+                Some(Culling { pass, reads: [c.clusters.clone(), c.nodes.clone(), c.items.clone()] })
             }
             _ => None,
         };
@@ -276,38 +281,38 @@ impl BatchRunner {
                 let stamp = |query, stage| timestamps.iter().for_each(|t| enc.timestamp(t, query, stage));
                 timestamps.iter().for_each(|t| enc.reset_queries(t));
                 stamp(0, vk::PipelineStageFlags::TOP_OF_PIPE);
-                // The emitters' closed form needs no map: it runs first, the maps after it.
-                if let Some(emitters) = emitters {
-                    emitters.record(enc, index, chunk.len() as u32);
-                }
                 // Each view's draw list, before the maps that draw it (the pass ends on compute write →
                 // indirect read).
                 if let (Some(c), Some(draws)) = (culling, maps.draws()) {
                     let push = CullPush {
-                        clusters: c.count,
                         views: views.views.len() as u32,
                         per_sensor: views.per_sensor as u32,
                         max_per_view: draws.max_per_view,
                         rd,
                         near,
-                        _pad: [0; 2],
+                        ..Default::default()
                     };
                     let zero = (!draws.count_buffer).then_some(&draws.commands);
-                    c.pass.record(enc, index, &draws.counts, zero, &push);
+                    c.pass.record(enc, index, (&draws.counts, &draws.walk), zero, &push);
+                }
+                stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                // The emitters' closed form needs no map: it runs before the maps.
+                if let Some(emitters) = emitters {
+                    emitters.record(enc, index, chunk.len() as u32);
                 }
                 strategy.record(enc, maps, &views, ck)?;
-                stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 barrier::global(enc, &[Access::ColorAttachmentWrite, Access::ComputeWrite], &[Access::ComputeRead]);
                 reduce.record(enc, index, strategy.map_layout(), chunk.len() as u32);
-                stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                stamp(3, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 // The results (and the radiance map) are read by the host, or copied, once the fence signals.
                 barrier::global(enc, &[Access::ComputeWrite], &[Access::HostRead, Access::TransferRead]);
                 Ok(())
             })?;
             slot.commands.submit()?;
             slot.commands.retire(radiance.clone());
-            if let Some(c) = &self.culling {
-                slot.commands.retire(c.clusters.clone());
+            for read in self.culling.iter().flat_map(|c| &c.reads) {
+                slot.commands.retire(read.clone());
             }
             slot.in_flight = chunk.to_vec();
             self.times.batches += 1;
@@ -339,8 +344,13 @@ impl BatchRunner {
             let add = |total: &mut Option<Duration>, seconds: f64| {
                 *total = Some(total.unwrap_or_default() + Duration::from_secs_f64(seconds.max(0.0)));
             };
-            add(&mut self.times.gpu_maps, t[1] - t[0]);
-            add(&mut self.times.gpu_reduction, t[2] - t[1]);
+            if self.culling.is_some() {
+                add(&mut self.times.gpu_cull, t[1] - t[0]);
+                add(&mut self.times.gpu_maps, t[2] - t[1]);
+            } else {
+                add(&mut self.times.gpu_maps, t[2] - t[0]);
+            }
+            add(&mut self.times.gpu_reduction, t[3] - t[2]);
         }
         if let (Some(total), Some(draws)) = (&mut self.times.drawn_triangles, slot.maps.draws()) {
             let views = pixels.len() * self.desc.layout.views() as usize;

@@ -64,8 +64,9 @@ pub struct RenderTimes {
     pub host_wait_seconds: f64,
     /// Host, within sensing: the refinement's decisions between rounds, and its light hints.
     pub host_refine_seconds: f64,
-    /// Device, by timestamp queries: the sensor maps and the reduction (absent without timestamps; on CPU
-    /// drivers clears may escape them).
+    /// Device, by timestamp queries: the culling pass (absent where nothing is culled), the sensor maps and
+    /// the reduction (absent without timestamps; on CPU drivers clears may escape them).
+    pub gpu_cull_seconds: Option<f64>,
     pub gpu_maps_seconds: Option<f64>,
     pub gpu_reduction_seconds: Option<f64>,
 }
@@ -85,6 +86,7 @@ impl RenderTimes {
             host_record_seconds: batches.host_record.as_secs_f64(),
             host_wait_seconds: batches.host_wait.as_secs_f64(),
             host_refine_seconds: refine.as_secs_f64(),
+            gpu_cull_seconds: batches.gpu_cull.map(|d| d.as_secs_f64()),
             gpu_maps_seconds: batches.gpu_maps.map(|d| d.as_secs_f64()),
             gpu_reduction_seconds: batches.gpu_reduction.map(|d| d.as_secs_f64()),
         }

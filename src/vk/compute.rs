@@ -6,6 +6,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use ash::vk;
 
+use super::buffer::Buffer;
 use super::descriptor::{DescriptorPool, SetWriter};
 use super::device::Device;
 use super::encoder::Encoder;
@@ -55,6 +56,19 @@ impl ComputeKernel {
         enc.bind(vk::PipelineBindPoint::COMPUTE, &self.pipeline, &self.layout, self.sets[set]);
         enc.push(&self.layout, push);
         enc.dispatch(groups);
+    }
+
+    /// Records bind, push constants and a dispatch of the workgroup counts at `offset` in `args`.
+    pub fn dispatch_indirect<T: bytemuck::Pod>(
+        &self,
+        enc: &Encoder<'_>,
+        set: usize,
+        push: &T,
+        (args, offset): (&Buffer, u64),
+    ) {
+        enc.bind(vk::PipelineBindPoint::COMPUTE, &self.pipeline, &self.layout, self.sets[set]);
+        enc.push(&self.layout, push);
+        enc.dispatch_indirect(args, offset);
     }
 }
 

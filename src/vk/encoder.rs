@@ -58,6 +58,21 @@ impl<'a> Encoder<'a> {
         unsafe { self.device.raw.cmd_dispatch(self.raw, groups[0], groups[1], groups[2]) };
     }
 
+    /// Dispatches the workgroup counts found at `offset` in `buffer` (a `VkDispatchIndirectCommand`).
+    pub fn dispatch_indirect(&self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording state, a compute pipeline bound by the caller; the buffer (indirect usage)
+        // outlives the submission and holds 12 bytes at `offset`.
+        unsafe { self.device.raw.cmd_dispatch_indirect(self.raw, buffer.raw, offset) };
+    }
+
+    /// Writes `words` at the start of `buffer` (inline in the command buffer: at most 64 KiB).
+    pub fn update(&self, buffer: &Buffer, words: &[u32]) {
+        assert!(words.len() * 4 <= 65536, "vkCmdUpdateBuffer writes at most 64 KiB");
+        // SAFETY: recording state; the buffer (transfer destination) outlives the submission and holds the
+        // words (its owner sized it for them).
+        unsafe { self.device.raw.cmd_update_buffer(self.raw, buffer.raw, 0, bytemuck::cast_slice(words)) };
+    }
+
     /// Fills a whole buffer with the 32-bit word `value`.
     pub fn fill(&self, buffer: &Buffer, value: u32) {
         // SAFETY: recording state; the buffer outlives the submission.

@@ -30,7 +30,7 @@ use ash::vk;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, TreeShape};
 use crate::gpu_types::{GpuDrawCommand, GpuSensorView, SensorPush, VERTEX_ATTRIBUTES, VERTEX_STRIDE};
 use crate::passes::{DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::sensors::layout::SensorLayout;
@@ -310,6 +310,9 @@ pub struct DrawLists {
     /// The device reads each view's count (`drawIndirectCount`); else every slot is drawn, the unused
     /// ones zeroed by the culling pass.
     pub count_buffer: bool,
+    /// The culling pass's walk: its queue of (node, view) pairs and its per-depth counts (device-local).
+    pub queue: Buffer,
+    pub walk: Buffer,
 }
 
 impl DrawLists {
@@ -318,11 +321,15 @@ impl DrawLists {
             | vk::BufferUsageFlags::INDIRECT_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST;
         let bytes = views as u64 * culled.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64;
+        let (storage, local) = (vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly);
+        let queue = culled.tree.queue_bytes(views as u64);
         Ok(Self {
-            commands: Buffer::new(device, "sensor draw lists", bytes, usage, MemoryLocation::GpuOnly)?,
+            commands: Buffer::new(device, "sensor draw lists", bytes, usage, local)?,
             counts: Buffer::new(device, "sensor draw counts", 8 * views as u64, usage, MemoryLocation::GpuToCpu)?,
             max_per_view: culled.max_per_view,
             count_buffer: culled.count_buffer,
+            queue: Buffer::new(device, "culling queue", queue, storage, local)?,
+            walk: Buffer::new(device, "culling walk", culled.tree.walk_bytes(), usage, local)?,
         })
     }
 }
@@ -333,6 +340,7 @@ struct Culled {
     indices: Arc<Buffer>,
     max_per_view: u32,
     count_buffer: bool,
+    tree: TreeShape,
 }
 
 /// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
@@ -399,14 +407,18 @@ impl SensorPipeline {
                 indices: c.indices.clone(),
                 max_per_view: c.max_per_view.max(1),
                 count_buffer: device.adapter.features.draw_indirect_count,
+                tree: c.tree.clone(),
             }),
             device: device.clone(),
         })
     }
 
-    /// Bytes of draw lists per sensor of `desc` (0 at full detail), for the batch size.
+    /// Bytes of draw lists and culling queue per sensor of `desc` (0 at full detail), for the batch size.
     fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
-        let per_view = self.culled.as_ref().map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64);
+        let per_view = self
+            .culled
+            .as_ref()
+            .map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
         desc.layout.views() as u64 * per_view
     }
 
