@@ -6,7 +6,7 @@
 // One invocation per (node, view) pair of depth `step`: step 0 takes the root for every view; later steps
 // take the pairs the step before queued. An inner node queues each child the view may keep something of;
 // a leaf tests its clusters. Dropped, for a cluster's sphere or a node's (which holds its clusters'): wholly
-// behind the sensor's tangent plane, outside the view's four side planes or one of its clip planes, not an
+// behind the sensor's tangent plane (for a cluster also its slab: clusters::reach), outside the view's four side planes or one of its clip planes, not an
 // emitter in an emitters-only view; and clusters whose level is not the one selected by
 // `own error <= tau < parent error` (projected from the sensor; tau is half the view's centre texel), nodes
 // where no cluster below can be (their largest parent error projects to at most tau, or their smallest own
@@ -56,11 +56,28 @@ bool sees(GpuSensorView view, GpuSensor s, vec4 sphere, uint flags) {
     return keep;
 }
 
-float projected(vec4 bounds, float error, vec3 eye) {
-    if (error == 0.0) {
+// The largest dot(dir, p) over a cluster's points, at most (clusters::reach): `dir` a unit vector.
+float reach(vec4 sphere, vec4 slab, vec3 dir) {
+    float along = dot(dir, slab.xyz);
+    float across = sqrt(max(1.0 - along * along, 0.0));
+    return dot(dir, sphere.xyz) + abs(along) * slab.w + across * sphere.w;
+}
+
+// The distance from p to the nearest point of the box [lo, hi] (0 inside), and to its farthest point.
+float nearest(vec3 lo, vec3 hi, vec3 p) {
+    return length(max(max(lo - p, p - hi), vec3(0.0)));
+}
+
+float farthest(vec3 lo, vec3 hi, vec3 p) {
+    return length(max(abs(p - lo), abs(p - hi)));
+}
+
+// The error of a bound (its box, error in min.w) as an angle from the eye (clusters::projected_error).
+float projected(vec4 lo, vec4 hi, vec3 eye) {
+    if (lo.w == 0.0) {
         return 0.0;
     }
-    return error / max(distance(bounds.xyz, eye) - bounds.w, push.near);
+    return lo.w / max(nearest(lo.xyz, hi.xyz, eye), push.near);
 }
 
 void main() {
@@ -90,8 +107,8 @@ void main() {
     if ((here.flags & NODE_LEAF) != 0u) {
         for (uint j = 0u; j < here.count; j++) {
             GpuCluster k = clusters[items[here.first + j]];
-            bool keep = sees(view, s, k.sphere, k.flags) && projected(k.own, k.errors.x, eye) <= tau
-                && projected(k.parent, k.errors.y, eye) > tau;
+            bool keep = sees(view, s, k.sphere, k.flags) && reach(k.sphere, k.slab, s.n.xyz) >= dot(s.n.xyz, eye)
+                && projected(k.own_min, k.own_max, eye) <= tau && projected(k.parent_min, k.parent_max, eye) > tau;
             if (keep) {
                 uint slot = atomicAdd(counts[v], 1u);
                 atomicAdd(counts[push.views + v], k.index_count / 3u);
@@ -107,8 +124,8 @@ void main() {
         GpuCullNode c = nodes[child];
         // TreeNode::may_select: the largest parent error too coarse somewhere, the smallest own error fine.
         bool keep = sees(view, s, c.sphere, c.flags)
-            && c.errors.y / max(distance(c.parent.xyz, eye) - c.parent.w, push.near) > tau
-            && c.errors.x / max(distance(c.own.xyz, eye) + c.own.w, push.near) <= tau;
+            && c.parent_min.w / max(nearest(c.parent_min.xyz, c.parent_max.xyz, eye), push.near) > tau
+            && c.own_min.w / max(farthest(c.own_min.xyz, c.own_max.xyz, eye), push.near) <= tau;
         if (keep) {
             uint slot = atomicAdd(walk[push.step + 1u].x, 1u);
             if (slot < push.out_capacity) {

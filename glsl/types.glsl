@@ -116,10 +116,12 @@ const float PI = 3.14159265358979323846;
 
 // One cluster of the LOD hierarchy (clusters::Cluster flattened).
 struct GpuCluster {
-    vec4 sphere;  // bounding sphere of its triangles
-    vec4 own;     // its own error bound's sphere (error in errors.x; 0: full detail)
-    vec4 parent;  // its parent's (error in errors.y; FLT_MAX: terminal)
-    vec4 errors;
+    vec4 sphere;      // bounding sphere of its triangles
+    vec4 slab;        // the slab holding them: unit axis, half thickness about the sphere's centre
+    vec4 own_min;     // its own error bound's box; w: its error (0: full detail)
+    vec4 own_max;
+    vec4 parent_min;  // its parent's; w: its error (FLT_MAX: terminal)
+    vec4 parent_max;
     uint first_index;
     uint index_count;
     uint flags;  // CLUSTER_EMITTER
@@ -128,10 +130,11 @@ struct GpuCluster {
 
 // One node of the clusters' bounding tree (clusters::TreeNode flattened).
 struct GpuCullNode {
-    vec4 sphere;  // holds every cluster's bounding sphere below
-    vec4 own;     // holds their own bounds' spheres (smallest own error in errors.x)
-    vec4 parent;  // holds their parent bounds' spheres (largest parent error in errors.y)
-    vec4 errors;
+    vec4 sphere;      // holds every cluster's bounding sphere below
+    vec4 own_min;     // holds their own boxes; w: the smallest own error
+    vec4 own_max;
+    vec4 parent_min;  // holds their parent boxes; w: the largest parent error
+    vec4 parent_max;
     uint first;  // first child node, or with NODE_LEAF first leaf item
     uint count;
     uint flags;  // CLUSTER_EMITTER (an emitter below) | NODE_LEAF

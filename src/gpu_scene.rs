@@ -9,7 +9,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Vec3, Vec4};
 
-use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
+use crate::clusters::{ClusterMesh, CullTree, max_selected};
 use crate::gpu_types::{
     CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuCullNode, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface,
     MAX_GROUPS, NODE_LEAF, Vertex,
@@ -94,15 +94,16 @@ impl GpuClusters {
 
 /// The clusters as the culling pass reads them; `emitter(surface)` says which surfaces emit.
 pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Vec<GpuCluster> {
-    let bounds = |b: &ErrorBounds| Vec3::from(b.center).extend(b.radius);
     clusters
         .clusters
         .iter()
         .map(|k| GpuCluster {
             sphere: Vec4::from(k.sphere),
-            own: bounds(&k.own),
-            parent: bounds(&k.parent),
-            errors: Vec4::new(k.own.error, k.parent.error, 0.0, 0.0),
+            slab: Vec4::from(k.slab),
+            own_min: Vec3::from(k.own.min).extend(k.own.error),
+            own_max: Vec3::from(k.own.max).extend(0.0),
+            parent_min: Vec3::from(k.parent.min).extend(k.parent.error),
+            parent_max: Vec3::from(k.parent.max).extend(0.0),
             first_index: k.first_index,
             index_count: k.index_count,
             flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
@@ -133,14 +134,14 @@ impl TreeShape {
 
 /// The clusters' bounding tree as the culling pass reads it.
 pub fn gpu_cull_nodes(tree: &CullTree) -> Vec<GpuCullNode> {
-    let bounds = |b: &ErrorBounds| Vec3::from(b.center).extend(b.radius);
     tree.nodes
         .iter()
         .map(|n| GpuCullNode {
             sphere: Vec4::from(n.sphere),
-            own: bounds(&n.own),
-            parent: bounds(&n.parent),
-            errors: Vec4::new(n.own.error, n.parent.error, 0.0, 0.0),
+            own_min: Vec3::from(n.own.min).extend(n.own.error),
+            own_max: Vec3::from(n.own.max).extend(0.0),
+            parent_min: Vec3::from(n.parent.min).extend(n.parent.error),
+            parent_max: Vec3::from(n.parent.max).extend(0.0),
             first: n.first,
             count: n.count,
             flags: if n.emitter { CLUSTER_EMITTER } else { 0 } | if n.leaf { NODE_LEAF } else { 0 },

@@ -241,11 +241,14 @@ const _: () = assert!(size_of::<Vertex>() == 16);
 pub struct GpuCluster {
     /// Bounding sphere of its triangles: centre, radius.
     pub sphere: Vec4,
-    /// Its own error bound (centre, radius) and its parent's; the errors themselves in `errors`.
-    pub own: Vec4,
-    pub parent: Vec4,
-    /// x: own error (0: full detail), y: parent error (`f32::MAX`: terminal); zw unused.
-    pub errors: Vec4,
+    /// The slab holding them: unit axis, half thickness about the sphere's centre (`clusters::reach`).
+    pub slab: Vec4,
+    /// Its own error bound's box (xyz of min and max) and error (min's w; 0: full detail), and its
+    /// parent's (error `f32::MAX`: terminal).
+    pub own_min: Vec4,
+    pub own_max: Vec4,
+    pub parent_min: Vec4,
+    pub parent_max: Vec4,
     pub first_index: u32,
     pub index_count: u32,
     /// [`CLUSTER_EMITTER`] or 0.
@@ -265,11 +268,12 @@ pub const NODE_LEAF: u32 = 2;
 pub struct GpuCullNode {
     /// Holds every cluster's bounding sphere below: centre, radius.
     pub sphere: Vec4,
-    /// Spheres holding every cluster's own bounds and parent bounds; the errors in `errors`.
-    pub own: Vec4,
-    pub parent: Vec4,
-    /// x: the smallest own error below, y: the largest parent error; zw unused.
-    pub errors: Vec4,
+    /// A box holding every cluster's own box (min's w: the smallest own error below), and one holding
+    /// every parent box (min's w: the largest parent error).
+    pub own_min: Vec4,
+    pub own_max: Vec4,
+    pub parent_min: Vec4,
+    pub parent_max: Vec4,
     /// Its first child (a node, or with [`NODE_LEAF`] a leaf item) and how many.
     pub first: u32,
     pub count: u32,

@@ -149,6 +149,6 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
         .map(|i| gpu[i].index_count / 3)
         .sum();
     let full: u32 =
-        (0..gpu.len()).filter(ball).filter(|&i| gpu[i].errors.x == 0.0).map(|i| gpu[i].index_count / 3).sum();
+        (0..gpu.len()).filter(ball).filter(|&i| gpu[i].own_min.w == 0.0).map(|i| gpu[i].index_count / 3).sum();
     assert!(drawn > 0 && drawn * 10 < full, "the far sensor draws {drawn} of the sphere's {full} triangles");
 }

@@ -102,7 +102,18 @@ fn shared_structs_match_glsl() {
         (
             14,
             "GpuCluster",
-            rust_layout!(GpuCluster: sphere, own, parent, errors, first_index, index_count, flags, _pad),
+            rust_layout!(
+                GpuCluster: sphere,
+                slab,
+                own_min,
+                own_max,
+                parent_min,
+                parent_max,
+                first_index,
+                index_count,
+                flags,
+                _pad
+            ),
         ),
         (
             15,
@@ -127,7 +138,21 @@ fn shared_structs_match_glsl() {
                 _pad
             ),
         ),
-        (17, "GpuCullNode", rust_layout!(GpuCullNode: sphere, own, parent, errors, first, count, flags, _pad)),
+        (
+            17,
+            "GpuCullNode",
+            rust_layout!(
+                GpuCullNode: sphere,
+                own_min,
+                own_max,
+                parent_min,
+                parent_max,
+                first,
+                count,
+                flags,
+                _pad
+            ),
+        ),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -7,12 +7,12 @@ use glam::Vec3;
 use meshopt::{ClodMesh, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
 use rayon::prelude::*;
 
-use super::{Cluster, ClusterMesh, ErrorBounds, sphere};
+use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
 use crate::scene::Mesh;
 use crate::scene::surfaces::weld;
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
-pub const BUILD_VERSION: u32 = 1;
+pub const BUILD_VERSION: u32 = 3;
 /// Triangles per cluster at most (and vertices: meshoptimizer's default for rasterisation).
 pub const MAX_TRIANGLES: usize = 128;
 
@@ -77,10 +77,20 @@ fn surface_clusters(triangles: &[[Vec3; 3]], surface: u32, simplify: bool) -> Pa
     // (group, refined group or -1, indices) per cluster; each group's simplified bounds.
     let mut groups: Vec<(u32, ErrorBounds)> = Vec::new();
     let mut clusters: Vec<(usize, i32, Vec<u32>)> = Vec::new();
+    // Each group's box holds its members' triangles and the boxes of the groups they came from, which
+    // come first (a group is emitted after the groups its members were simplified from).
+    let positions = &part.positions;
     clod_build(config, &ClodMesh::new(&corners, &vertices), |group, emitted| {
         let id = groups.len();
-        let b = group.simplified;
-        groups.push((group.depth as u32, ErrorBounds { center: b.center, radius: b.radius, error: b.error }));
+        let mut bounds = ErrorBounds::empty(group.simplified.error);
+        for c in emitted {
+            let points = c.indices.iter().map(|&v| Vec3::from(positions[v as usize]));
+            bounds = bounds.union(&ErrorBounds::of(points, 0.0), bounds.error);
+            if c.refined >= 0 {
+                bounds = bounds.union(&groups[c.refined as usize].1, bounds.error);
+            }
+        }
+        groups.push((group.depth as u32, bounds));
         clusters.extend(emitted.iter().map(|c| (id, c.refined, c.indices.to_vec())));
         id as i32
     });
@@ -104,12 +114,15 @@ impl Part {
     fn push(&mut self, indices: &[u32], depth: u32, own: ErrorBounds, parent: ErrorBounds) {
         let positions = &self.positions;
         let points = indices.iter().map(|&v| Vec3::from(positions[v as usize]));
+        let sphere = sphere(points);
+        let corners = indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| Vec3::from(positions[t[k] as usize])));
         self.clusters.push(Cluster {
             first_index: self.indices.len() as u32,
             index_count: indices.len() as u32,
             surface: self.surface,
             depth,
-            sphere: sphere(points),
+            sphere,
+            slab: slab(corners, Vec3::from_slice(&sphere[..3])),
             own,
             parent,
             _pad: [0; 2],

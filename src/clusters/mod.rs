@@ -2,10 +2,11 @@
 //! as fine as its texels, so a large mesh is split into clusters of at most [`MAX_TRIANGLES`] triangles and
 //! simplified group by group, in the manner of Nanite and meshoptimizer's `clusterlod` ([`build`]).
 //!
-//! Every cluster carries two error bounds (a sphere and an object-space error): `own`, the bound of the
+//! Every cluster carries two error bounds (a box and an object-space error): `own`, the bound of the
 //! geometry it replaced (error 0 for the mesh's own triangles), and `parent`, the bound of what replaces it
 //! (`f32::MAX` when nothing does). Both are bounds of whole groups, shared by every cluster that refers to
-//! them and monotonic up the hierarchy, so that selecting, for one viewpoint,
+//! them and monotonic up the hierarchy (a group's box holds its children's, its error is at least
+//! theirs), so that selecting, for one viewpoint,
 //! `projected(own) <= τ < projected(parent)` ([`select`]) takes exactly one version of every piece of
 //! surface and never cracks.
 //!
@@ -26,12 +27,16 @@ pub use build::{BUILD_VERSION, MAX_TRIANGLES, build};
 pub use select::{max_selected, projected_error, selected};
 pub use tree::{CullTree, TreeNode};
 
-/// A bounding sphere and the object-space error of the geometry it bounds (meshoptimizer's `clodBounds`).
+/// The object-space error of a version of a piece of surface, and a box holding everything that version
+/// stands for: its own triangles and, down the hierarchy, all those it replaced. Boxes, not
+/// meshoptimizer's merged spheres: a group's footprint is the union of its children's, which a box holds
+/// exactly, where spheres of spheres grew to three times the mesh within ten levels (and a sensor inside a
+/// group's bound can take nothing coarser, so coarse levels went unused near the mesh).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ErrorBounds {
-    pub center: [f32; 3],
-    pub radius: f32,
+    pub min: [f32; 3],
+    pub max: [f32; 3],
     /// Largest distance between this version of the surface and the original, in scene units; `f32::MAX`
     /// for "never good enough" (nothing replaces a terminal cluster).
     pub error: f32,
@@ -41,8 +46,43 @@ impl ErrorBounds {
     pub const FULL_DETAIL: f32 = 0.0;
     pub const TERMINAL: f32 = f32::MAX;
 
-    pub fn center(&self) -> Vec3 {
-        Vec3::from(self.center)
+    /// The distance from `eye` to the nearest point of the box (0 inside). Where one box holds another,
+    /// this is never larger for it, in floating point too (every step is monotonic).
+    pub fn distance(&self, eye: Vec3) -> f32 {
+        let (lo, hi) = (Vec3::from(self.min), Vec3::from(self.max));
+        (lo - eye).max(eye - hi).max(Vec3::ZERO).length()
+    }
+
+    /// The distance from `eye` to the farthest point of the box.
+    pub fn farthest(&self, eye: Vec3) -> f32 {
+        let (lo, hi) = (Vec3::from(self.min), Vec3::from(self.max));
+        (eye - lo).abs().max((eye - hi).abs()).length()
+    }
+
+    /// Whether the box holds `other`'s.
+    pub fn holds(&self, other: &ErrorBounds) -> bool {
+        (0..3).all(|k| self.min[k] <= other.min[k] && other.max[k] <= self.max[k])
+    }
+
+    /// The box holding both, with `error`.
+    pub fn union(&self, other: &ErrorBounds, error: f32) -> ErrorBounds {
+        ErrorBounds {
+            min: Vec3::from(self.min).min(Vec3::from(other.min)).to_array(),
+            max: Vec3::from(self.max).max(Vec3::from(other.max)).to_array(),
+            error,
+        }
+    }
+
+    /// An empty box (holds nothing; the union's identity).
+    pub fn empty(error: f32) -> ErrorBounds {
+        ErrorBounds { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], error }
+    }
+
+    /// The box of `points`.
+    pub fn of(points: impl Iterator<Item = Vec3>, error: f32) -> ErrorBounds {
+        points.fold(ErrorBounds::empty(error), |b, p| {
+            b.union(&ErrorBounds { min: p.to_array(), max: p.to_array(), error }, error)
+        })
     }
 }
 
@@ -57,6 +97,10 @@ pub struct Cluster {
     pub depth: u32,
     /// Bounding sphere of its own triangles (centre, radius), for culling.
     pub sphere: [f32; 4],
+    /// A slab holding its triangles: unit axis (xyz, their mean normal) and half thickness (w) about the
+    /// sphere's centre; with the sphere, a bound on how far they reach along any direction ([`reach`]),
+    /// tight for the near-flat clusters of a smooth surface.
+    pub slab: [f32; 4],
     /// The bound of the geometry this cluster replaced (error 0: it is the original).
     pub own: ErrorBounds,
     /// The bound of the geometry that replaces it (error `f32::MAX`: nothing does).
@@ -101,8 +145,31 @@ impl ClusterMesh {
 
     /// Bytes held, for statistics.
     pub fn bytes(&self) -> usize {
-        self.positions.len() * 12 + self.vertex_surface.len() * 4 + self.indices.len() * 4 + self.clusters.len() * 72
+        self.positions.len() * 12
+            + self.vertex_surface.len() * 4
+            + self.indices.len() * 4
+            + self.clusters.len() * size_of::<Cluster>()
     }
+}
+
+/// The largest `dir · p` over the points of a cluster with this `sphere` and `slab`, at most: `dir` a unit
+/// vector. The points lie in the sphere and within the slab's half thickness of its mid-plane, so along the
+/// axis they reach `|dir · axis| · h` and across it `|dir × axis| · r` beyond the centre.
+pub fn reach(sphere: [f32; 4], slab: [f32; 4], dir: Vec3) -> f32 {
+    let (centre, axis) = (Vec3::from_slice(&sphere[..3]), Vec3::from_slice(&slab[..3]));
+    let along = dir.dot(axis);
+    let across = (1.0 - along * along).max(0.0).sqrt();
+    dir.dot(centre) + along.abs() * slab[3] + across * sphere[3]
+}
+
+/// The slab of `triangles` about `centre`: their area-weighted mean normal (any axis where their normals
+/// cancel) and the largest distance of a corner from the plane through `centre` across it, a little larger
+/// than exact so that it still holds them after rounding on the GPU.
+pub fn slab(triangles: impl Iterator<Item = [Vec3; 3]> + Clone, centre: Vec3) -> [f32; 4] {
+    let normal: Vec3 = triangles.clone().map(|[a, b, c]| (b - a).cross(c - a)).sum();
+    let axis = normal.try_normalize().unwrap_or(Vec3::Z);
+    let half = triangles.flatten().map(|p| axis.dot(p - centre).abs()).fold(0.0f32, f32::max);
+    axis.extend(half * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element()).to_array()
 }
 
 /// Bounding sphere of `points`: the centre of their box and the farthest point from it.

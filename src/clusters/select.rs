@@ -6,14 +6,14 @@ use glam::Vec3;
 use super::{Cluster, ErrorBounds};
 
 /// The angle (radians, small-angle) that `bounds`' error subtends at best from `eye`: its error over the
-/// nearest distance from `eye` to its sphere (at least `near`). Rotation invariant, so it needs no view
-/// direction; the same bounds give the same value for every cluster that shares them.
+/// distance from `eye` to its box (at least `near`). Rotation invariant, so it needs no view direction;
+/// the same bounds give the same value for every cluster that shares them, and a bound that holds another
+/// with no smaller error never gives less.
 pub fn projected_error(bounds: &ErrorBounds, eye: Vec3, near: f32) -> f32 {
     if bounds.error == ErrorBounds::FULL_DETAIL {
         return 0.0;
     }
-    let distance = (bounds.center().distance(eye) - bounds.radius).max(near);
-    bounds.error / distance
+    bounds.error / bounds.distance(eye).max(near)
 }
 
 /// Whether `cluster` is the version of its piece of surface to draw from `eye` when an error of `tau`
@@ -32,7 +32,7 @@ pub fn selected(cluster: &Cluster, eye: Vec3, near: f32, tau: f32) -> bool {
 pub fn max_selected(mesh: &super::ClusterMesh) -> usize {
     use std::collections::HashMap;
     let key =
-        |surface: u32, b: &ErrorBounds| (surface, b.center.map(f32::to_bits), b.radius.to_bits(), b.error.to_bits());
+        |surface: u32, b: &ErrorBounds| (surface, b.min.map(f32::to_bits), b.max.map(f32::to_bits), b.error.to_bits());
     let mut balance: HashMap<_, i64> = HashMap::new();
     let mut full = 0usize;
     for c in &mesh.clusters {

@@ -13,10 +13,11 @@
 //!   leaf: ≤ LEAF clusters (as indices into `CullTree::items`)
 //! ```
 //!
-//! Each node bounds its clusters three ways, each a sphere that holds theirs: `sphere` (their triangles'
-//! bounding spheres: view culling), `parent` with the *largest* parent error and `own` with the *smallest*
-//! own error. From any eye the node's projected parent error is then at least each cluster's and its
-//! projected own error at most each cluster's, so where [`TreeNode::may_select`] says no, no cluster
+//! Each node bounds its clusters three ways, each holding theirs: `sphere` (their triangles' bounding
+//! spheres: view culling), `parent` (a box) with the *largest* parent error and `own` (a box) with the
+//! *smallest* own error. From any eye the node's projected parent error is then at least each cluster's
+//! and its own error over the distance to its box's farthest point at most each cluster's projected own
+//! error, so where [`TreeNode::may_select`] says no, no cluster
 //! below is selected (`own ≤ τ < parent`, `select::selected`), and a walk that stops there selects
 //! exactly what testing every cluster would ([`CullTree::select`]; tests/clusters.rs).
 
@@ -34,10 +35,10 @@ pub const LEAF: usize = 8;
 pub struct TreeNode {
     /// Holds the bounding spheres of every cluster below (centre, radius).
     pub sphere: [f32; 4],
-    /// A sphere holding every cluster's `parent` bounds, with the largest of their errors
+    /// A box holding every cluster's `parent` box, with the largest of their errors
     /// (`ErrorBounds::TERMINAL` if any is terminal).
     pub parent: ErrorBounds,
-    /// A sphere holding every cluster's `own` bounds, with the smallest of their errors (0 if any is full
+    /// A box holding every cluster's `own` box, with the smallest of their errors (0 if any is full
     /// detail).
     pub own: ErrorBounds,
     /// Leaf: `CullTree::items[first..first + count]` are its clusters; else `nodes[first..first + count]`
@@ -56,9 +57,7 @@ impl TreeNode {
     /// coarse).
     pub fn may_select(&self, eye: Vec3, near: f32, tau: f32) -> bool {
         let (parent, own) = (&self.parent, &self.own);
-        let parent_distance = (parent.center().distance(eye) - parent.radius).max(near);
-        let own_distance = (own.center().distance(eye) + own.radius).max(near);
-        parent.error / parent_distance > tau && own.error / own_distance <= tau
+        parent.error / parent.distance(eye).max(near) > tau && own.error / own.farthest(eye).max(near) <= tau
     }
 }
 
@@ -207,14 +206,15 @@ impl<F: Fn(u32) -> bool> Builder<'_, F> {
     }
 }
 
-/// The error `pick` chooses among `bounds` (max or min), with a sphere holding those whose error decides
+/// The error `pick` chooses among `bounds` (max or min), with a box holding those whose error decides
 /// anything: neither full detail (0 projects to 0 from anywhere) nor terminal (projects past any
-/// threshold). If the chosen error is one of those, the sphere is never read.
+/// threshold). If the chosen error is one of those, the box decides nothing.
 fn bound(bounds: impl Iterator<Item = ErrorBounds> + Clone, pick: fn(f32, f32) -> f32) -> ErrorBounds {
     let error = bounds.clone().map(|b| b.error).reduce(pick).unwrap_or(ErrorBounds::FULL_DETAIL);
     let finite = bounds.filter(|b| b.error != ErrorBounds::FULL_DETAIL && b.error != ErrorBounds::TERMINAL);
-    let [x, y, z, radius] = enclose(finite.map(|b| (b.center(), b.radius)));
-    ErrorBounds { center: [x, y, z], radius, error }
+    let all = finite.fold(ErrorBounds::empty(error), |all, b| all.union(&b, error));
+    // None: a point, whose finite distance keeps a terminal error projecting past any threshold.
+    if all.min[0] > all.max[0] { ErrorBounds { error, ..ErrorBounds::default() } } else { all }
 }
 
 /// A sphere holding every sphere of `spheres` (centre of their box, radius to the farthest), a little

@@ -26,6 +26,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Mat4, Vec4, Vec4Swizzles as _};
 
+use crate::clusters::{self, ErrorBounds};
 use crate::gpu_scene::TreeShape;
 use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
 use crate::shaders;
@@ -130,17 +131,18 @@ impl CullPass {
     }
 }
 
-/// The CPU twin of `glsl/cull.comp`: whether `view` (of `sensor`) draws `cluster`. The walk keeps exactly
-/// these: it enters a node only where this could hold for a cluster below.
+/// The CPU twin of `glsl/cull.comp`: whether `view` (of `sensor`) draws `cluster`: [`sees`] its sphere, it
+/// reaches above the sensor's tangent plane (its slab: a smooth surface's clusters around a sensor on it
+/// lie below), and it is the level selected. The walk keeps exactly these: it enters a node only where
+/// this could hold for a cluster below.
 pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd: u32, near: f32) -> bool {
-    let eye = sensor.origin.xyz();
+    let (eye, n) = (sensor.origin.xyz(), sensor.n.xyz());
     let tau = accepted_error(view, rd);
-    let projected = |bounds: Vec4, error: f32| {
-        if error == 0.0 { 0.0 } else { error / (bounds.xyz().distance(eye) - bounds.w).max(near) }
-    };
+    let bounds = |min: Vec4, max: Vec4| ErrorBounds { min: min.xyz().into(), max: max.xyz().into(), error: min.w };
     sees(view, sensor, cluster.sphere, cluster.flags)
-        && projected(cluster.own, cluster.errors.x) <= tau
-        && projected(cluster.parent, cluster.errors.y) > tau
+        && clusters::reach(cluster.sphere.into(), cluster.slab.into(), n) >= n.dot(eye)
+        && clusters::projected_error(&bounds(cluster.own_min, cluster.own_max), eye, near) <= tau
+        && clusters::projected_error(&bounds(cluster.parent_min, cluster.parent_max), eye, near) > tau
 }
 
 /// Whether `view` may see anything within `sphere` (of something flagged `flags`): not wholly behind the
