@@ -138,6 +138,38 @@ fn no_selection_takes_more_clusters_than_the_bound() {
     assert_eq!(most, full, "the finest level is the largest selection here");
 }
 
+/// A cluster's sphere and slab bound how far its triangles reach along any direction (what the culling
+/// pass tests against a sensor's tangent plane), and on a smooth surface the slab is much tighter than the
+/// sphere alone along the surface's normal.
+#[test]
+fn a_clusters_reach_bounds_its_triangles_and_is_tight_along_its_normal() {
+    let c = clusters::build(&scene());
+    let dirs: Vec<Vec3> = (0..64)
+        .map(|i| {
+            let (z, phi) = (1.0 - 2.0 * (i as f32 + 0.5) / 64.0, i as f32 * 2.399_963);
+            let r = (1.0 - z * z).sqrt();
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect();
+    let (mut slab_sum, mut sphere_sum) = (0.0f32, 0.0f32);
+    for k in &c.clusters {
+        let points: Vec<Vec3> = c.triangles_of(k).flatten().map(|v| Vec3::from(c.positions[v as usize])).collect();
+        let axis = Vec3::from_slice(&k.slab[..3]);
+        for &dir in dirs.iter().chain([axis, -axis].iter()) {
+            let most = points.iter().map(|p| dir.dot(*p)).fold(f32::MIN, f32::max);
+            let reach = clusters::reach(k.sphere, k.slab, dir);
+            assert!(most <= reach, "{k:?} along {dir}: a corner at {most}, reach {reach}");
+        }
+        let centre = Vec3::from_slice(&k.sphere[..3]);
+        slab_sum += clusters::reach(k.sphere, k.slab, axis) - axis.dot(centre);
+        sphere_sum += k.sphere[3];
+    }
+    assert!(
+        slab_sum * 4.0 < sphere_sum,
+        "along their normals clusters reach {slab_sum} in all, their spheres {sphere_sum}"
+    );
+}
+
 /// The bounding tree's walk selects exactly what testing every cluster selects, from near and far, at
 /// every threshold, testing a few clusters per cluster it selects; every cluster is in exactly one leaf.
 #[test]
