@@ -6,11 +6,11 @@
 // One invocation per (node, view) pair of depth `step`: step 0 takes the root for every view; later steps
 // take the pairs the step before queued. An inner node queues each child the view may keep something of;
 // a leaf tests its clusters. Dropped, for a cluster's sphere or a node's (which holds its clusters'): wholly
-// behind the sensor's tangent plane (for a cluster also its slab: clusters::reach), outside the view's four side planes or one of its clip planes, not an
-// emitter in an emitters-only view; and clusters whose level is not the one selected by
-// `own error <= tau < parent error` (projected from the sensor; tau is half the view's centre texel), nodes
-// where no cluster below can be (their largest parent error projects to at most tau, or their smallest own
-// error to more). CPU twins: passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
+// behind the sensor's tangent plane (for a cluster also its slab: clusters::reach), outside the view's four
+// side planes or one of its clip planes, not an emitter in an emitters-only view; and clusters whose level
+// is not the one selected by `own error <= tau < parent error` (projected from the sensor; tau is half the
+// view's centre texel), nodes where no cluster below can be (their largest parent error projects to at
+// most tau, or their smallest own error to more). CPU twins: passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
 #include "types.glsl"
 
 layout(local_size_x = 64) in;
@@ -124,7 +124,7 @@ void main() {
         GpuCullNode c = nodes[child];
         // TreeNode::may_select: the largest parent error too coarse somewhere, the smallest own error fine.
         bool keep = sees(view, s, c.sphere, c.flags)
-            && c.parent_min.w / max(nearest(c.parent_min.xyz, c.parent_max.xyz, eye), push.near) > tau
+            && projected(c.parent_min, c.parent_max, eye) > tau
             && c.own_min.w / max(farthest(c.own_min.xyz, c.own_max.xyz, eye), push.near) <= tau;
         if (keep) {
             uint slot = atomicAdd(walk[push.step + 1u].x, 1u);

@@ -9,7 +9,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Vec3, Vec4};
 
-use crate::clusters::{ClusterMesh, CullTree, max_selected};
+use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
 use crate::gpu_types::{
     CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuCullNode, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface,
     MAX_GROUPS, NODE_LEAF, Vertex,
@@ -97,19 +97,32 @@ pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Ve
     clusters
         .clusters
         .iter()
-        .map(|k| GpuCluster {
-            sphere: Vec4::from(k.sphere),
-            slab: Vec4::from(k.slab),
-            own_min: Vec3::from(k.own.min).extend(k.own.error),
-            own_max: Vec3::from(k.own.max).extend(0.0),
-            parent_min: Vec3::from(k.parent.min).extend(k.parent.error),
-            parent_max: Vec3::from(k.parent.max).extend(0.0),
-            first_index: k.first_index,
-            index_count: k.index_count,
-            flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
-            _pad: 0,
+        .map(|k| {
+            let ([own_min, own_max], [parent_min, parent_max]) = (gpu_bounds(&k.own), gpu_bounds(&k.parent));
+            GpuCluster {
+                sphere: Vec4::from(k.sphere),
+                slab: Vec4::from(k.slab),
+                own_min,
+                own_max,
+                parent_min,
+                parent_max,
+                first_index: k.first_index,
+                index_count: k.index_count,
+                flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
+                _pad: 0,
+            }
         })
         .collect()
+}
+
+/// Error bounds as the culling pass reads them: the box's corners, the error in the first's w.
+pub fn gpu_bounds(b: &ErrorBounds) -> [Vec4; 2] {
+    [Vec3::from(b.min).extend(b.error), Vec3::from(b.max).extend(0.0)]
+}
+
+/// The error bounds that [`gpu_bounds`] wrote as `[min, max]`.
+pub fn bounds_from_gpu(min: Vec4, max: Vec4) -> ErrorBounds {
+    ErrorBounds { min: min.truncate().into(), max: max.truncate().into(), error: min.w }
 }
 
 /// The shape of the tree walked: its root and how many nodes lie at each depth.
@@ -136,16 +149,19 @@ impl TreeShape {
 pub fn gpu_cull_nodes(tree: &CullTree) -> Vec<GpuCullNode> {
     tree.nodes
         .iter()
-        .map(|n| GpuCullNode {
-            sphere: Vec4::from(n.sphere),
-            own_min: Vec3::from(n.own.min).extend(n.own.error),
-            own_max: Vec3::from(n.own.max).extend(0.0),
-            parent_min: Vec3::from(n.parent.min).extend(n.parent.error),
-            parent_max: Vec3::from(n.parent.max).extend(0.0),
-            first: n.first,
-            count: n.count,
-            flags: if n.emitter { CLUSTER_EMITTER } else { 0 } | if n.leaf { NODE_LEAF } else { 0 },
-            _pad: 0,
+        .map(|n| {
+            let ([own_min, own_max], [parent_min, parent_max]) = (gpu_bounds(&n.own), gpu_bounds(&n.parent));
+            GpuCullNode {
+                sphere: Vec4::from(n.sphere),
+                own_min,
+                own_max,
+                parent_min,
+                parent_max,
+                first: n.first,
+                count: n.count,
+                flags: if n.emitter { CLUSTER_EMITTER } else { 0 } | if n.leaf { NODE_LEAF } else { 0 },
+                _pad: 0,
+            }
         })
         .collect()
 }

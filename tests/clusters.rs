@@ -8,8 +8,8 @@ use std::collections::HashMap;
 
 use common::meshes::scene;
 use glam::Vec3;
-use sensorlight::clusters::{self, Cluster, ClusterMesh, CullTree, ErrorBounds, cache, selected, tree};
-use sensorlight::scene::SurfaceId;
+use sensorlight::clusters::{self, Cluster, ClusterMesh, CullTree, cache, selected, tree};
+use sensorlight::scene::{Aabb, SurfaceId};
 
 /// A triangle by its corners' bits, rotated so that the smallest corner comes first (orientation kept).
 fn key(t: [[u32; 3]; 3]) -> [[u32; 3]; 3] {
@@ -38,12 +38,12 @@ fn error_bounds_grow_up_the_hierarchy() {
         assert!(k.own.error <= k.parent.error, "{k:?}");
         if k.parent.error < f32::MAX && k.own.error > 0.0 {
             // The parent's box holds its child's, so its projected error is at least as large from anywhere.
-            assert!(k.parent.holds(&k.own), "{k:?}");
+            assert!(k.parent.aabb().contains(&k.own.aabb()), "{k:?}");
         }
         if k.parent.error < f32::MAX {
             // And it holds the cluster's own triangles.
             let points = c.triangles_of(k).flatten().map(|v| Vec3::from(c.positions[v as usize]));
-            assert!(k.parent.holds(&ErrorBounds::of(points, 0.0)), "{k:?}");
+            assert!(k.parent.aabb().contains(&Aabb::of(points)), "{k:?}");
         }
     }
     assert!(levels >= 3, "a 16k-triangle sphere simplifies over several levels, found {levels}");

@@ -8,8 +8,8 @@ use meshopt::{ClodMesh, VertexDataAdapter, clod_build, clod_default_config, type
 use rayon::prelude::*;
 
 use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
-use crate::scene::Mesh;
 use crate::scene::surfaces::weld;
+use crate::scene::{Aabb, Mesh};
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
 pub const BUILD_VERSION: u32 = 3;
@@ -82,15 +82,14 @@ fn surface_clusters(triangles: &[[Vec3; 3]], surface: u32, simplify: bool) -> Pa
     let positions = &part.positions;
     clod_build(config, &ClodMesh::new(&corners, &vertices), |group, emitted| {
         let id = groups.len();
-        let mut bounds = ErrorBounds::empty(group.simplified.error);
+        let mut footprint = Aabb::EMPTY;
         for c in emitted {
-            let points = c.indices.iter().map(|&v| Vec3::from(positions[v as usize]));
-            bounds = bounds.union(&ErrorBounds::of(points, 0.0), bounds.error);
+            footprint = footprint.union(Aabb::of(c.indices.iter().map(|&v| Vec3::from(positions[v as usize]))));
             if c.refined >= 0 {
-                bounds = bounds.union(&groups[c.refined as usize].1, bounds.error);
+                footprint = footprint.union(groups[c.refined as usize].1.aabb());
             }
         }
-        groups.push((group.depth as u32, bounds));
+        groups.push((group.depth as u32, ErrorBounds::new(footprint, group.simplified.error)));
         clusters.extend(emitted.iter().map(|c| (id, c.refined, c.indices.to_vec())));
         id as i32
     });

@@ -23,6 +23,8 @@ pub mod tree;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use crate::scene::Aabb;
+
 pub use build::{BUILD_VERSION, MAX_TRIANGLES, build};
 pub use select::{max_selected, projected_error, selected};
 pub use tree::{CullTree, TreeNode};
@@ -46,43 +48,13 @@ impl ErrorBounds {
     pub const FULL_DETAIL: f32 = 0.0;
     pub const TERMINAL: f32 = f32::MAX;
 
-    /// The distance from `eye` to the nearest point of the box (0 inside). Where one box holds another,
-    /// this is never larger for it, in floating point too (every step is monotonic).
-    pub fn distance(&self, eye: Vec3) -> f32 {
-        let (lo, hi) = (Vec3::from(self.min), Vec3::from(self.max));
-        (lo - eye).max(eye - hi).max(Vec3::ZERO).length()
+    pub fn new(bounds: Aabb, error: f32) -> Self {
+        ErrorBounds { min: bounds.min.to_array(), max: bounds.max.to_array(), error }
     }
 
-    /// The distance from `eye` to the farthest point of the box.
-    pub fn farthest(&self, eye: Vec3) -> f32 {
-        let (lo, hi) = (Vec3::from(self.min), Vec3::from(self.max));
-        (eye - lo).abs().max((eye - hi).abs()).length()
-    }
-
-    /// Whether the box holds `other`'s.
-    pub fn holds(&self, other: &ErrorBounds) -> bool {
-        (0..3).all(|k| self.min[k] <= other.min[k] && other.max[k] <= self.max[k])
-    }
-
-    /// The box holding both, with `error`.
-    pub fn union(&self, other: &ErrorBounds, error: f32) -> ErrorBounds {
-        ErrorBounds {
-            min: Vec3::from(self.min).min(Vec3::from(other.min)).to_array(),
-            max: Vec3::from(self.max).max(Vec3::from(other.max)).to_array(),
-            error,
-        }
-    }
-
-    /// An empty box (holds nothing; the union's identity).
-    pub fn empty(error: f32) -> ErrorBounds {
-        ErrorBounds { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], error }
-    }
-
-    /// The box of `points`.
-    pub fn of(points: impl Iterator<Item = Vec3>, error: f32) -> ErrorBounds {
-        points.fold(ErrorBounds::empty(error), |b, p| {
-            b.union(&ErrorBounds { min: p.to_array(), max: p.to_array(), error }, error)
-        })
+    /// Its box.
+    pub fn aabb(&self) -> Aabb {
+        Aabb { min: Vec3::from(self.min), max: Vec3::from(self.max) }
     }
 }
 
@@ -174,12 +146,7 @@ pub fn slab(triangles: impl Iterator<Item = [Vec3; 3]> + Clone, centre: Vec3) ->
 
 /// Bounding sphere of `points`: the centre of their box and the farthest point from it.
 pub fn sphere(points: impl Iterator<Item = Vec3> + Clone) -> [f32; 4] {
-    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for p in points.clone() {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let center = (lo + hi) * 0.5;
+    let center = Aabb::of(points.clone()).center();
     let radius = points.map(|p| p.distance(center)).fold(0.0f32, f32::max);
     center.extend(radius).to_array()
 }

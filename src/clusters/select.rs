@@ -13,7 +13,7 @@ pub fn projected_error(bounds: &ErrorBounds, eye: Vec3, near: f32) -> f32 {
     if bounds.error == ErrorBounds::FULL_DETAIL {
         return 0.0;
     }
-    bounds.error / bounds.distance(eye).max(near)
+    bounds.error / bounds.aabb().distance(eye).max(near)
 }
 
 /// Whether `cluster` is the version of its piece of surface to draw from `eye` when an error of `tau`

@@ -17,13 +17,14 @@
 //! spheres: view culling), `parent` (a box) with the *largest* parent error and `own` (a box) with the
 //! *smallest* own error. From any eye the node's projected parent error is then at least each cluster's
 //! and its own error over the distance to its box's farthest point at most each cluster's projected own
-//! error, so where [`TreeNode::may_select`] says no, no cluster
-//! below is selected (`own ≤ τ < parent`, `select::selected`), and a walk that stops there selects
-//! exactly what testing every cluster would ([`CullTree::select`]; tests/clusters.rs).
+//! error, so where [`TreeNode::may_select`] says no, no cluster below is selected (`own ≤ τ < parent`,
+//! `select::selected`), and a walk that stops there selects exactly what testing every cluster would
+//! ([`CullTree::select`]; tests/clusters.rs).
 
 use glam::Vec3;
 
-use super::{ClusterMesh, ErrorBounds};
+use super::{ClusterMesh, ErrorBounds, projected_error};
+use crate::scene::Aabb;
 
 /// Children per inner node at most: wide, so that the tree is shallow (the GPU walks it one depth per
 /// dispatch). Typical 8.
@@ -56,8 +57,8 @@ impl TreeNode {
     /// below is replaced by a coarser version), or the smallest own error to more (everything below is too
     /// coarse).
     pub fn may_select(&self, eye: Vec3, near: f32, tau: f32) -> bool {
-        let (parent, own) = (&self.parent, &self.own);
-        parent.error / parent.distance(eye).max(near) > tau && own.error / own.farthest(eye).max(near) <= tau
+        projected_error(&self.parent, eye, near) > tau
+            && self.own.error / self.own.aabb().farthest(eye).max(near) <= tau
     }
 }
 
@@ -164,10 +165,8 @@ impl<F: Fn(u32) -> bool> Builder<'_, F> {
             return;
         }
         let centre = |c: u32| Vec3::from_slice(&self.mesh.clusters[c as usize].sphere[..3]);
-        let (lo, hi) = members
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &c| (lo.min(centre(c)), hi.max(centre(c))));
-        let axis = (hi - lo).max_position();
+        let centres = Aabb::of(members.iter().map(|&c| centre(c)));
+        let axis = (centres.max - centres.min).max_position();
         let mid = members.len() / 2;
         members.select_nth_unstable_by(mid, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]));
         let (left, right) = members.split_at_mut(mid);
@@ -212,20 +211,19 @@ impl<F: Fn(u32) -> bool> Builder<'_, F> {
 fn bound(bounds: impl Iterator<Item = ErrorBounds> + Clone, pick: fn(f32, f32) -> f32) -> ErrorBounds {
     let error = bounds.clone().map(|b| b.error).reduce(pick).unwrap_or(ErrorBounds::FULL_DETAIL);
     let finite = bounds.filter(|b| b.error != ErrorBounds::FULL_DETAIL && b.error != ErrorBounds::TERMINAL);
-    let all = finite.fold(ErrorBounds::empty(error), |all, b| all.union(&b, error));
+    let all = finite.fold(Aabb::EMPTY, |all, b| all.union(b.aabb()));
     // None: a point, whose finite distance keeps a terminal error projecting past any threshold.
-    if all.min[0] > all.max[0] { ErrorBounds { error, ..ErrorBounds::default() } } else { all }
+    ErrorBounds::new(if all.is_empty() { Aabb { min: Vec3::ZERO, max: Vec3::ZERO } } else { all }, error)
 }
 
 /// A sphere holding every sphere of `spheres` (centre of their box, radius to the farthest), a little
 /// larger than exact so that it still holds them after rounding on the GPU.
 fn enclose(spheres: impl Iterator<Item = (Vec3, f32)> + Clone) -> [f32; 4] {
-    let (lo, hi) =
-        spheres.clone().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (c, r)| (lo.min(c - r), hi.max(c + r)));
-    if lo.x > hi.x {
+    let boxes = spheres.clone().fold(Aabb::EMPTY, |all, (c, r)| all.union(Aabb { min: c - r, max: c + r }));
+    if boxes.is_empty() {
         return [0.0; 4];
     }
-    let centre = (lo + hi) * 0.5;
+    let centre = boxes.center();
     let radius = spheres.map(|(c, r)| c.distance(centre) + r).fold(0.0f32, f32::max);
     let slack = 1e-5 * (radius + centre.abs().max_element());
     centre.extend(radius + slack).to_array()

@@ -26,8 +26,8 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Mat4, Vec4, Vec4Swizzles as _};
 
-use crate::clusters::{self, ErrorBounds};
-use crate::gpu_scene::TreeShape;
+use crate::clusters;
+use crate::gpu_scene::{TreeShape, bounds_from_gpu};
 use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
 use crate::shaders;
 use crate::vk::{Access, Buffer, ComputeKernel, Device, Encoder, barrier, compute::groups_for};
@@ -138,11 +138,10 @@ impl CullPass {
 pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd: u32, near: f32) -> bool {
     let (eye, n) = (sensor.origin.xyz(), sensor.n.xyz());
     let tau = accepted_error(view, rd);
-    let bounds = |min: Vec4, max: Vec4| ErrorBounds { min: min.xyz().into(), max: max.xyz().into(), error: min.w };
     sees(view, sensor, cluster.sphere, cluster.flags)
         && clusters::reach(cluster.sphere.into(), cluster.slab.into(), n) >= n.dot(eye)
-        && clusters::projected_error(&bounds(cluster.own_min, cluster.own_max), eye, near) <= tau
-        && clusters::projected_error(&bounds(cluster.parent_min, cluster.parent_max), eye, near) > tau
+        && clusters::projected_error(&bounds_from_gpu(cluster.own_min, cluster.own_max), eye, near) <= tau
+        && clusters::projected_error(&bounds_from_gpu(cluster.parent_min, cluster.parent_max), eye, near) > tau
 }
 
 /// Whether `view` may see anything within `sphere` (of something flagged `flags`): not wholly behind the

@@ -9,9 +9,9 @@
 //!
 //! A batch is recorded as [culling →] [emitters →] sensor maps (the strategy) → barrier → reduction, which
 //! writes each sensor's R into the radiance map and into the slot's results, which the host reads when the
-//! slot is next waited on: a round of refinement reads back exactly the values it sensed, nothing more. When the scene is drawn
-//! from its clusters, the culling pass first writes each view's draw list into the slot (compute write →
-//! indirect read), and the runner reads back each view's count with the results.
+//! slot is next waited on: a round of refinement reads back exactly the values it sensed, nothing more.
+//! When the scene is drawn from its clusters, the culling pass first writes each view's draw list into the
+//! slot (compute write → indirect read), and the runner reads back each view's count with the results.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

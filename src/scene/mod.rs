@@ -68,6 +68,33 @@ impl Aabb {
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
+
+    /// The box of `points` ([`Aabb::EMPTY`] for none).
+    pub fn of(points: impl IntoIterator<Item = Vec3>) -> Self {
+        let mut b = Self::EMPTY;
+        points.into_iter().for_each(|p| b.grow(p));
+        b
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+
+    /// Whether it holds `other`.
+    pub fn contains(&self, other: &Self) -> bool {
+        self.min.cmple(other.min).all() && other.max.cmple(self.max).all()
+    }
+
+    /// The distance from `p` to its nearest point (0 inside). Where one box holds another, this is never
+    /// larger for it, in floating point too (every step is monotonic).
+    pub fn distance(&self, p: Vec3) -> f32 {
+        (self.min - p).max(p - self.max).max(Vec3::ZERO).length()
+    }
+
+    /// The distance from `p` to its farthest point.
+    pub fn farthest(&self, p: Vec3) -> f32 {
+        (p - self.min).abs().max((p - self.max).abs()).length()
+    }
 }
 
 #[derive(Clone, Debug)]
