@@ -6,7 +6,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
-use sensorlight::params::{EstimatorKind, EstimatorParams, FrameParams};
+use sensorlight::params::{EstimatorKind, EstimatorParams, FrameParams, Indirect};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{self, Renderer, probe_pixels};
 use sensorlight::scene::{ImageSize, builtin};
@@ -22,7 +22,7 @@ fn gpu_sensing(c: &mut Criterion) {
     };
     let size = ImageSize { width: 32, height: 32 };
     let scene = builtin::lightbox(size);
-    let frame = FrameParams::every_pixel(0.2, Vec3::splat(0.05));
+    let frame = FrameParams::every_pixel(Indirect::Epsilon(0.2), Vec3::splat(0.05));
     let mut group = c.benchmark_group(format!("sense 64 hemicube sensors on {}", device.adapter.name));
     group.sample_size(10);
     for rd in [32, 128] {
@@ -47,7 +47,11 @@ fn cpu_loops(c: &mut Criterion) {
         b.iter(|| weights::sensor_weights(black_box(SensorKind::Hemicube), 256))
     });
     let scene = builtin::lightbox(ImageSize { width: 32, height: 32 });
-    let estimator = EstimatorParams { sensor: SensorKind::Hemicube, epsilon: 0.2, background: Vec3::splat(0.05) };
+    let estimator = EstimatorParams {
+        sensor: SensorKind::Hemicube,
+        indirect: Indirect::Epsilon(0.2),
+        background: Vec3::splat(0.05),
+    };
     let integrator = Integrator::new(&scene, estimator, 1024, 1).unwrap();
     c.bench_function("reference R at one point, 1024 directions", |b| {
         b.iter(|| integrator.radiance(black_box(Vec3::new(0.1, 0.0, 0.2)), Vec3::Y, 7))

@@ -17,7 +17,7 @@ fn main() -> Result<()> {
     let rd: u32 = args.get(3).map_or(Ok(64), |s| s.parse())?;
     let device = Device::new(&DeviceOptions::from_env(None, sensorlight::passes::requirements()))?;
     let size = ImageSize { width: 128, height: 128 };
-    let frame = FrameParams::every_pixel(0.1, glam::Vec3::ZERO);
+    let frame = FrameParams::every_pixel(sensorlight::params::Indirect::Epsilon(0.1), glam::Vec3::ZERO);
     let mut r = Vec::new();
     for detail in [Detail::Full, Detail::Clusters] {
         let mut renderer = Renderer::builder(&device, &scene, SensorKind::Hemicube, rd)

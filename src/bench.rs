@@ -10,7 +10,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::params::{EstimatorKind, EstimatorParams, FrameParams};
+use crate::params::{EstimatorKind, EstimatorParams, FrameParams, Indirect};
 use crate::passes::fill::FillPass;
 use crate::renderer::{self, Detail, Renderer, probe_pixels};
 use crate::scene::{ImageSize, Scene};
@@ -123,7 +123,10 @@ pub fn run(device: &Arc<Device>, config: &BenchConfig, events: &mut dyn FnMut(Be
         }
     }
 
-    let frame = FrameParams::every_pixel(config.estimator.epsilon, config.estimator.background);
+    let frame = FrameParams::every_pixel(
+        Indirect::Epsilon(config.estimator.indirect.paper_epsilon()),
+        config.estimator.background,
+    );
     let layers = sensor.layers() as u64; // the main layers: the fill rate's yardstick
     let mut pixels = Vec::new();
     let mut measurements = Vec::new();
@@ -296,7 +299,10 @@ pub fn run_meshes(
     events: &mut dyn FnMut(BenchEvent),
 ) -> Result<MeshReport> {
     let sensor = config.estimator.sensor;
-    let frame = FrameParams::every_pixel(config.estimator.epsilon, config.estimator.background);
+    let frame = FrameParams::every_pixel(
+        Indirect::Epsilon(config.estimator.indirect.paper_epsilon()),
+        config.estimator.background,
+    );
     let mut measurements = Vec::new();
     for &rd in &config.sizes {
         let mut runs = Vec::new();

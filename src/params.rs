@@ -14,7 +14,10 @@ pub use crate::sensors::SensorShape;
 
 pub const DEFAULT_SENSOR: SensorShape = SensorShape::Hemicube;
 pub const DEFAULT_FOV_DEG: f32 = 135.0;
+/// ε of the paper's model when `--epsilon` is given without a value in mind (`metrics`, `bench`).
 pub const DEFAULT_EPSILON: f32 = 0.1;
+/// `render`'s and `reference`'s light: global illumination until converged.
+pub const DEFAULT_INDIRECT: Indirect = Indirect::Bounces(Bounces::Converged);
 /// The sensor map size and filter radius by estimator. The exact estimator reads only visibility from its
 /// maps, through zoom views: 32² maps keep every shipped and hard scene within 1 % of the oracle, and its
 /// little noise the filter cannot lower without blurring real gradients (docs/ACCURACY.md). The paper's
@@ -73,6 +76,107 @@ impl fmt::Display for EstimatorKind {
     }
 }
 
+/// How many times light is reflected between surfaces before it reaches a visible point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bounces {
+    /// Exactly this many indirect bounces; 0 is direct light only. N indirect bounces are a path tracer's
+    /// maximum depth N + 2 (Mitsuba's convention: depth 1 sees the emitters, depth 2 adds direct light).
+    Fixed(u32),
+    /// Until what a bounce adds is negligible: the renderer stops when the cache changes by less than its
+    /// tolerance and extrapolates the rest of the series; the oracle traces paths of any length (Russian
+    /// roulette ends them).
+    Converged,
+}
+
+impl std::str::FromStr for Bounces {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "auto" => Ok(Self::Converged),
+            n => n
+                .parse()
+                .map(Self::Fixed)
+                .map_err(|_| format!("expected a count of bounces (0, 1, 2, …) or 'auto', got '{s}'")),
+        }
+    }
+}
+
+impl fmt::Display for Bounces {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Fixed(n) => write!(f, "{n}"),
+            Self::Converged => f.write_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Bounces {
+    /// `bounces = 3` or `bounces = "auto"` in a scene file's `[render]` table.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Count(u32),
+            Word(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::Count(n) => Ok(Self::Fixed(n)),
+            Raw::Word(w) => w.parse().map_err(serde::de::Error::custom),
+        }
+    }
+}
+
+/// What a sensor sees on a surface that does not emit towards it (docs/DESIGN.md §1): the paper's constant,
+/// or the light that surface really reflects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Indirect {
+    /// The paper's model (its eq. 2): `Kd·ε`, a constant standing in for the light a surface reflects.
+    /// Radiance units, ≥ 0; 0 is direct light only; typical 0.05–0.3 for lights of `Ke` ≈ 10–20.
+    Epsilon(f32),
+    /// Global illumination: the outgoing radiance `Le + Kd·R` of the surface seen, through this many bounces.
+    Bounces(Bounces),
+}
+
+impl Indirect {
+    /// ε as the sensor maps use it: the paper's constant, 0 with global illumination (whose maps read the
+    /// radiance cache instead).
+    pub fn epsilon(self) -> f32 {
+        match self {
+            Self::Epsilon(e) => e,
+            Self::Bounces(_) => 0.0,
+        }
+    }
+
+    /// ε for what measures the paper's sensors (`metrics`, `bench`): this model's, or [`DEFAULT_EPSILON`]
+    /// where global illumination was asked for.
+    pub fn paper_epsilon(self) -> f32 {
+        match self {
+            Self::Epsilon(e) => e,
+            Self::Bounces(_) => DEFAULT_EPSILON,
+        }
+    }
+
+    /// The indirect bounces to compute: none with the paper's model (its ε is no bounce).
+    pub fn bounces(self) -> Option<Bounces> {
+        match self {
+            Self::Epsilon(_) | Self::Bounces(Bounces::Fixed(0)) => None,
+            Self::Bounces(b) => Some(b),
+        }
+    }
+}
+
+impl fmt::Display for Indirect {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Epsilon(e) => write!(f, "the paper's ε {e}"),
+            Self::Bounces(Bounces::Fixed(0)) => f.write_str("direct light only"),
+            Self::Bounces(Bounces::Fixed(1)) => f.write_str("global illumination, 1 indirect bounce"),
+            Self::Bounces(Bounces::Fixed(n)) => write!(f, "global illumination, {n} indirect bounces"),
+            Self::Bounces(Bounces::Converged) => f.write_str("global illumination until converged"),
+        }
+    }
+}
+
 /// A user-settable parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Param {
@@ -80,6 +184,7 @@ pub enum Param {
     Sensor,
     Fov,
     Epsilon,
+    Bounces,
     Background,
     SensorSize,
     Tile,
@@ -97,6 +202,7 @@ impl Param {
             Self::Sensor => "--sensor",
             Self::Fov => "--fov",
             Self::Epsilon => "--epsilon",
+            Self::Bounces => "--bounces",
             Self::Background => "--background",
             Self::SensorSize => "--sensor-size",
             Self::Tile => "--tile",
@@ -122,6 +228,7 @@ impl Param {
             Self::Sensor => "sensor",
             Self::Fov => "fov_deg",
             Self::Epsilon => "epsilon",
+            Self::Bounces => "bounces",
             Self::Background => "background",
             Self::SensorSize => "sensor_size",
             Self::Tile => "tile",
@@ -174,6 +281,7 @@ pub struct Overrides {
     pub sensor: Option<SensorShape>,
     pub fov_deg: Option<f32>,
     pub epsilon: Option<f32>,
+    pub bounces: Option<Bounces>,
     /// Radiance of rays that leave the scene, linear RGB.
     pub background: Option<[f32; 3]>,
     pub sensor_size: Option<u32>,
@@ -206,6 +314,16 @@ impl Overrides {
             && !(e.is_finite() && e >= 0.0)
         {
             return fail(Param::Epsilon, format!("must be a finite number ≥ 0, got {e}"));
+        }
+        if let (Some(e), Some(b)) = (self.epsilon, self.bounces) {
+            return fail(
+                Param::Bounces,
+                format!(
+                    "{b} cannot be combined with {} {e}: ε is the paper's constant in place of reflected light, \
+                     bounces compute that light; give one",
+                    Param::Epsilon.as_set(origin)
+                ),
+            );
         }
         if let Some(b) = self.background
             && !b.iter().all(|v| v.is_finite() && *v >= 0.0)
@@ -251,10 +369,8 @@ impl Overrides {
 pub struct EstimatorParams {
     /// `hemicube` (default; the whole hemisphere) or `frustum` (the paper's single view of `fov`).
     pub sensor: SensorKind,
-    /// ε: a non-emitting surface seen by a sensor returns `Kd·ε` (paper eq. 2), standing in for the light it
-    /// reflects. Radiance units; ≥ 0; 0 gives direct lighting only. Typical 0.05–0.3 for scenes whose lights
-    /// have `Ke` ≈ 10–20.
-    pub epsilon: f32,
+    /// What a sensor sees on a non-emitting surface: the paper's `Kd·ε`, or the light it reflects.
+    pub indirect: Indirect,
     /// Radiance of rays that leave the scene (linear RGB, ≥ 0). Default black.
     pub background: Vec3,
 }
@@ -263,8 +379,8 @@ pub struct EstimatorParams {
 /// refinement, filter and the estimator's constants.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameParams {
-    /// ε and the background (see [`EstimatorParams`]).
-    pub epsilon: f32,
+    /// The model of indirect light and the background (see [`EstimatorParams`]).
+    pub indirect: Indirect,
     pub background: Vec3,
     /// dt: initial grid step of the adaptive refinement (paper §III-G), a power of two ≥ 1; 16 typical.
     pub tile: u32,
@@ -282,8 +398,8 @@ pub struct FrameParams {
 impl FrameParams {
     /// Every pixel sensed and nothing filtered: R exactly as the sensors give it (probes, benchmarks,
     /// comparisons with the oracle).
-    pub const fn every_pixel(epsilon: f32, background: Vec3) -> Self {
-        Self { epsilon, background, tile: 1, dradiance: 0.0, filter_radius: 0 }
+    pub const fn every_pixel(indirect: Indirect, background: Vec3) -> Self {
+        Self { indirect, background, tile: 1, dradiance: 0.0, filter_radius: 0 }
     }
 }
 
@@ -318,6 +434,25 @@ impl RenderParams {
         flags.check(&Origin::Flag)?;
 
         let mut origins = BTreeMap::new();
+        let indirect = {
+            // One model: a flag of either kind overrides the scene file's, whichever kind that set.
+            let (from, origin) = if flags.epsilon.is_some() || flags.bounces.is_some() {
+                (flags, Origin::Flag)
+            } else {
+                (scene, scene_origin.clone())
+            };
+            match (from.epsilon, from.bounces) {
+                (Some(e), _) => {
+                    origins.insert(Param::Epsilon, origin);
+                    Indirect::Epsilon(e)
+                }
+                (None, Some(b)) => {
+                    origins.insert(Param::Bounces, origin);
+                    Indirect::Bounces(b)
+                }
+                (None, None) => DEFAULT_INDIRECT,
+            }
+        };
         let mut pick = |param: Param, flag: bool, from_scene: bool| {
             if flag {
                 origins.insert(param, Origin::Flag);
@@ -334,7 +469,6 @@ impl RenderParams {
         let estimator_kind = resolve!(estimator, Param::Estimator, DEFAULT_ESTIMATOR);
         let shape = resolve!(sensor, Param::Sensor, DEFAULT_SENSOR);
         let fov = resolve!(fov_deg, Param::Fov, DEFAULT_FOV_DEG);
-        let epsilon = resolve!(epsilon, Param::Epsilon, DEFAULT_EPSILON);
         let background = Vec3::from(resolve!(background, Param::Background, [0.0; 3]));
         let sensor_size = resolve!(sensor_size, Param::SensorSize, DEFAULT_SENSOR_SIZE.for_estimator(estimator_kind));
         let tile = resolve!(tile, Param::Tile, DEFAULT_TILE);
@@ -345,7 +479,7 @@ impl RenderParams {
         let sensor = SensorKind::new(shape, fov);
         let params = Self {
             estimator_kind,
-            estimator: EstimatorParams { sensor, epsilon, background },
+            estimator: EstimatorParams { sensor, indirect, background },
             sensor_size,
             tile,
             dradiance,
@@ -362,7 +496,7 @@ impl RenderParams {
     /// The per-render part.
     pub fn frame(&self) -> FrameParams {
         FrameParams {
-            epsilon: self.estimator.epsilon,
+            indirect: self.estimator.indirect,
             background: self.estimator.background,
             tile: self.tile,
             dradiance: self.dradiance,
@@ -384,8 +518,10 @@ impl RenderParams {
                 Param::Sensor.as_set(&fov)
             ));
         }
-        let epsilon = self.estimator.epsilon;
-        if brightest_emission > 0.0 && epsilon > brightest_emission {
+        if let Indirect::Epsilon(epsilon) = self.estimator.indirect
+            && brightest_emission > 0.0
+            && epsilon > brightest_emission
+        {
             warnings.push(format!(
                 "{} {epsilon} is brighter than every emitter (the brightest Ke component is {brightest_emission}): \
                  every surface then returns Kd·ε, and the constant term dominates the image",
@@ -426,7 +562,10 @@ mod tests {
         let flags = Overrides { epsilon: Some(0.25), ..Default::default() };
         let path = Path::new("room.toml");
         let p = RenderParams::resolve(Some((path, &scene)), &flags).unwrap();
-        assert_eq!((p.estimator.epsilon, p.tile, p.sensor_size), (0.25, 8, DEFAULT_SENSOR_SIZE.exact));
+        assert_eq!(
+            (p.estimator.indirect, p.tile, p.sensor_size),
+            (Indirect::Epsilon(0.25), 8, DEFAULT_SENSOR_SIZE.exact)
+        );
         let paper =
             RenderParams::resolve(None, &Overrides { estimator: Some(EstimatorKind::Paper), ..Default::default() });
         let paper = paper.unwrap();
@@ -435,6 +574,56 @@ mod tests {
         assert_eq!(p.origin(Param::Epsilon), Origin::Flag);
         assert_eq!(p.origin(Param::Tile), Origin::SceneFile(path.into()));
         assert_eq!(p.origin(Param::SensorSize), Origin::Default);
+    }
+
+    /// Global illumination by default; `--epsilon` or `--bounces` choose the model, a flag of either kind
+    /// over the scene file's of either kind; both at one level is an error naming them.
+    #[test]
+    fn one_model_of_indirect_light_is_chosen() {
+        let path = Path::new("s.toml");
+        let resolve = |scene: Overrides, flags: Overrides| RenderParams::resolve(Some((path, &scene)), &flags);
+        let none = Overrides::default;
+        assert_eq!(resolve(none(), none()).unwrap().estimator.indirect, DEFAULT_INDIRECT);
+        assert_eq!(DEFAULT_INDIRECT, Indirect::Bounces(Bounces::Converged));
+        let eps = |e| Overrides { epsilon: Some(e), ..Default::default() };
+        let bounces = |b| Overrides { bounces: Some(b), ..Default::default() };
+        let p = resolve(eps(0.0), bounces(Bounces::Fixed(2))).unwrap();
+        assert_eq!(
+            (p.estimator.indirect, p.origin(Param::Bounces)),
+            (Indirect::Bounces(Bounces::Fixed(2)), Origin::Flag)
+        );
+        let p = resolve(bounces(Bounces::Converged), eps(0.3)).unwrap();
+        assert_eq!((p.estimator.indirect, p.origin(Param::Epsilon)), (Indirect::Epsilon(0.3), Origin::Flag));
+        let p = resolve(eps(0.0), none()).unwrap();
+        assert_eq!(
+            (p.estimator.indirect, p.origin(Param::Epsilon)),
+            (Indirect::Epsilon(0.0), Origin::SceneFile(path.into()))
+        );
+        let both = Overrides { epsilon: Some(0.1), bounces: Some(Bounces::Fixed(1)), ..Default::default() };
+        let e = resolve(none(), both.clone()).unwrap_err().to_string();
+        assert!(e.starts_with("--bounces 1 cannot be combined with --epsilon 0.1"), "{e}");
+        let e = resolve(both, none()).unwrap_err().to_string();
+        assert!(
+            e.starts_with("s.toml: [render] bounces 1 cannot be combined with s.toml: [render] epsilon 0.1"),
+            "{e}"
+        );
+        assert_eq!(Indirect::Bounces(Bounces::Fixed(0)).bounces(), None);
+        assert_eq!(Indirect::Epsilon(0.2).bounces(), None);
+        assert_eq!(Indirect::Epsilon(0.2).paper_epsilon(), 0.2);
+        assert_eq!(DEFAULT_INDIRECT.paper_epsilon(), DEFAULT_EPSILON);
+    }
+
+    #[test]
+    fn bounces_read_as_a_count_or_auto() {
+        assert_eq!("auto".parse(), Ok(Bounces::Converged));
+        assert_eq!("3".parse(), Ok(Bounces::Fixed(3)));
+        assert!("-1".parse::<Bounces>().unwrap_err().contains("expected a count of bounces"));
+        for (text, expected) in [("bounces = 4", Bounces::Fixed(4)), ("bounces = \"auto\"", Bounces::Converged)] {
+            let table: toml::Table = toml::from_str(text).unwrap();
+            assert_eq!(Overrides::from_scene_table(Path::new("s.toml"), &table).unwrap().bounces, Some(expected));
+        }
+        let table: toml::Table = toml::from_str("bounces = \"many\"").unwrap();
+        assert!(Overrides::from_scene_table(Path::new("s.toml"), &table).is_err());
     }
 
     #[test]

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use glam::Vec4;
 use sensorlight::output::compare::{Agreement, Picture, agreement};
-use sensorlight::params::EstimatorKind;
+use sensorlight::params::{EstimatorKind, Indirect};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{Quiet, Renderer};
 use sensorlight::scene::{ImageSize, Scene};
@@ -131,8 +131,8 @@ fn door_ajar_defaults_within_three_percent_of_every_pixel() {
     let scene = Scene::load(&common::project("scenes/door-ajar/door-ajar.toml")).unwrap();
     let size = ImageSize { width: 160, height: 120 };
     let mut defaults = defaults("scenes/door-ajar/door-ajar.toml");
-    defaults.frame.epsilon = 0.0;
-    defaults.estimator.epsilon = 0.0;
+    defaults.frame.indirect = Indirect::Epsilon(0.0);
+    defaults.estimator.indirect = Indirect::Epsilon(0.0);
     let every = common::every_pixel(SensorKind::Hemicube, defaults.rd, 0.0);
     let (sensed, refined) = (render_exact(&scene, size, &every), render_exact(&scene, size, &defaults));
     assert!(refined.stats.sensors * 3 < sensed.stats.sensors, "the defaults refine: {}", refined.stats.sensors);

@@ -46,7 +46,13 @@ impl Progress for Recorder {
 #[test]
 fn progress_sees_every_phase_round_and_snapshot() {
     let scene = common::lightbox((48, 40));
-    let frame = FrameParams { epsilon: 0.1, background: glam::Vec3::ZERO, tile: 8, dradiance: 0.2, filter_radius: 0 };
+    let frame = FrameParams {
+        indirect: sensorlight::params::Indirect::Epsilon(0.1),
+        background: glam::Vec3::ZERO,
+        tile: 8,
+        dradiance: 0.2,
+        filter_radius: 0,
+    };
     let recorder = Recorder::default();
     let output = common::gpu(|device| {
         let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)

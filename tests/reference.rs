@@ -6,14 +6,14 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
 use sensorlight::light::polygon::{self, Domain, Receiver, parallel_rectangle};
-use sensorlight::params::EstimatorParams;
+use sensorlight::params::{EstimatorParams, Indirect};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::scene::{Camera, ImageSize, Scene};
 use sensorlight::sensors::frame::SensorFrame;
 use sensorlight::sensors::{SensorKind, frame};
 
 fn params(sensor: SensorKind, epsilon: f32) -> EstimatorParams {
-    EstimatorParams { sensor, epsilon, background: Vec3::ZERO }
+    EstimatorParams { sensor, indirect: Indirect::Epsilon(epsilon), background: Vec3::ZERO }
 }
 
 /// The sensor the oracle integrates for at `p` with normal `n`, in f64 for the closed forms.

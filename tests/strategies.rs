@@ -37,7 +37,7 @@ fn probe(
         .build_unchecked(kind)
         .unwrap();
     let pixels = probe_pixels(&renderer.gbuffer(size).unwrap().surface, 40);
-    let frame = FrameParams::every_pixel(0.1, Vec3::splat(0.02));
+    let frame = FrameParams::every_pixel(sensorlight::params::Indirect::Epsilon(0.1), Vec3::splat(0.02));
     renderer.sense_at(size, &pixels, &frame).unwrap().0
 }
 

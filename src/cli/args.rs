@@ -4,8 +4,8 @@
 use anyhow::{Result, ensure};
 use clap::Args;
 use sensorlight::params::{
-    DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG, DEFAULT_SENSOR,
-    DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
+    Bounces, DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG,
+    DEFAULT_SENSOR, DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
 };
 use sensorlight::scene::{ImageSize, Scene};
 
@@ -27,12 +27,31 @@ pub struct EstimatorFlags {
     #[arg(
         long,
         allow_negative_numbers = true,
-        help = format!("ε: non-emitters seen by a sensor return Kd·ε (≥ 0; 0 = direct light only) [default: {DEFAULT_EPSILON}]")
+        help = format!(
+            "ε: the paper's model instead of global illumination: non-emitters seen by a sensor return Kd·ε \
+             (≥ 0; 0 = direct light only) [default: global illumination; metrics and bench: {DEFAULT_EPSILON}]"
+        )
     )]
     pub epsilon: Option<f32>,
     /// Radiance of rays leaving the scene, as R,G,B [default: 0,0,0]
     #[arg(long, value_parser = parse_rgb, allow_negative_numbers = true)]
     pub background: Option<[f32; 3]>,
+}
+
+/// The light between surfaces: shared by `render` and `reference` (the paper's measurements keep its ε).
+#[derive(Args, Clone, Debug, Default)]
+pub struct BounceFlags {
+    /// Global illumination: indirect bounces, N ≥ 0 (0 = direct light only; N is a path tracer's maximum
+    /// depth N + 2), or auto: until converged [default: auto, unless --epsilon is given]
+    #[arg(long, value_name = "N|auto")]
+    pub bounces: Option<Bounces>,
+}
+
+impl BounceFlags {
+    /// `base` with these flags set.
+    pub fn overrides(&self, base: Overrides) -> Overrides {
+        Overrides { bounces: self.bounces, ..base }
+    }
 }
 
 /// Adaptive refinement and filtering (paper §III-G, §III-H): shared by `render` and `metrics`.

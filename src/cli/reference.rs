@@ -10,7 +10,7 @@ use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
 
-use super::args::{EstimatorFlags, ImageFlags};
+use super::args::{BounceFlags, EstimatorFlags, ImageFlags};
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -22,6 +22,8 @@ pub struct ReferenceArgs {
     output: PathBuf,
     #[command(flatten)]
     estimator: EstimatorFlags,
+    #[command(flatten)]
+    bounces: BounceFlags,
     #[command(flatten)]
     image: ImageFlags,
     /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
@@ -36,7 +38,7 @@ pub struct ReferenceArgs {
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     super::check_exr_outputs(&args.output, args.image.write_png(), &[], &[&args.scene])?;
-    let flags = Overrides { exposure: args.image.exposure, ..args.estimator.overrides() };
+    let flags = args.bounces.overrides(Overrides { exposure: args.image.exposure, ..args.estimator.overrides() });
     let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height))?;
     super::check_exr_outputs(&args.output, args.image.write_png(), &[], &scene.input_paths())?;
     let params = resolved.estimator;
@@ -47,11 +49,11 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         n => format!("a direction + a point on one of {n} emitter triangles each"),
     };
     say!(
-        "reference: {}x{}, {} sensor domain, ε {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
+        "reference: {}x{}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
         size.height,
         params.sensor,
-        params.epsilon,
+        params.indirect,
         args.samples,
         args.samples / REPLICATES,
         args.seed

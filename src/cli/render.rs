@@ -13,7 +13,7 @@ use sensorlight::renderer::{DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Render
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event, StrategyRequest};
 
-use super::args::{EstimatorFlags, ImageFlags, RefinementFlags, estimator_help, sensor_size_help};
+use super::args::{BounceFlags, EstimatorFlags, ImageFlags, RefinementFlags, estimator_help, sensor_size_help};
 use super::progress::{Preview, RenderProgress};
 use super::say;
 
@@ -27,6 +27,8 @@ pub struct RenderArgs {
     output: PathBuf,
     #[command(flatten)]
     estimator: EstimatorFlags,
+    #[command(flatten)]
+    bounces: BounceFlags,
     #[command(flatten)]
     image: ImageFlags,
     #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
@@ -66,12 +68,12 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn overrides(&self) -> Overrides {
-        self.refinement.overrides(Overrides {
+        self.refinement.overrides(self.bounces.overrides(Overrides {
             estimator: self.estimator_kind,
             sensor_size: self.sensor_size,
             exposure: self.image.exposure,
             ..self.estimator.overrides()
-        })
+        }))
     }
 }
 

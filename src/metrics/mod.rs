@@ -71,7 +71,7 @@ impl MetricsConfig {
             table1_sensor_size: params.sensor_size,
             tile: params.tile,
             dradiance: params.dradiance,
-            epsilon: params.estimator.epsilon,
+            epsilon: params.estimator.indirect.paper_epsilon(),
             filter_radius: params.filter_radius,
             params,
             table1_resolutions: PAPER_TABLE1.iter().map(|&(w, h, _, _)| size(&(w, h))).collect(),

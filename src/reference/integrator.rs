@@ -144,7 +144,7 @@ impl<'a> Integrator<'a> {
         if cos_light > 0.0 && material.is_emitter() {
             Seen::Emitter { triangle: hit.triangle, ke: material.ke, t: hit.t, cos_light }
         } else {
-            Seen::Other(material.kd * self.params.epsilon)
+            Seen::Other(material.kd * self.params.indirect.epsilon())
         }
     }
 

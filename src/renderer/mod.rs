@@ -483,7 +483,7 @@ impl Renderer {
         let mut deliver =
             |p: &[u32], found: &[GpuSensorResult]| p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
         let start = Instant::now();
-        let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
+        let ck = CkParams { epsilon: frame.indirect.epsilon(), background: frame.background };
         self.runner.sense(&g, pixels, ck, &mut deliver)?;
         self.runner.drain(&mut deliver)?;
         Ok((pixels.iter().map(|&i| r[i as usize]).collect(), start.elapsed()))
@@ -525,7 +525,7 @@ impl Renderer {
         // host keeps R only where it sensed: that is all the refinement reads.
         progress.phase(Phase::Sensing);
         let sensing_start = Instant::now();
-        let ck = CkParams { epsilon: frame.epsilon, background: frame.background };
+        let ck = CkParams { epsilon: frame.indirect.epsilon(), background: frame.background };
         let (refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
         let t = Instant::now();
         let mut refinement = match &self.hints {

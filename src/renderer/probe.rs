@@ -10,7 +10,7 @@ use anyhow::Result;
 use glam::{Vec3, Vec4};
 
 use super::{Renderer, RendererConfig};
-use crate::params::{EstimatorKind, FrameParams};
+use crate::params::{EstimatorKind, FrameParams, Indirect};
 use crate::passes::sensor_maps::{self, StrategyDesc};
 use crate::scene::{ImageSize, NO_SURFACE, Scene, SurfaceId, builtin};
 use crate::sensors::layout::SensorLayout;
@@ -21,7 +21,7 @@ use crate::vk::Device;
 const PROBE_SIZE: ImageSize = ImageSize { width: 32, height: 32 };
 
 /// ε and background of the probe: non-zero, so that every part of `Ck` is exercised.
-const PROBE_FRAME: FrameParams = FrameParams::every_pixel(0.2, Vec3::splat(0.05));
+const PROBE_FRAME: FrameParams = FrameParams::every_pixel(Indirect::Epsilon(0.2), Vec3::splat(0.05));
 
 pub(crate) struct ProbeRenderer<'a> {
     device: &'a Arc<Device>,

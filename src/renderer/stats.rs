@@ -22,7 +22,8 @@ pub struct RenderStats {
     pub height: u32,
     pub tile: u32,
     pub dradiance: f32,
-    pub epsilon: f32,
+    /// The model of indirect light, as `--bounces` or `--epsilon` name it.
+    pub indirect: String,
     pub filter_radius: u32,
     /// Sensors rendered, in total and per refinement round.
     pub sensors: u64,
@@ -122,7 +123,7 @@ impl RenderStats {
             height: size.height,
             tile: frame.tile,
             dradiance: frame.dradiance,
-            epsilon: frame.epsilon,
+            indirect: frame.indirect.to_string(),
             filter_radius: frame.filter_radius,
             sensors,
             sensors_per_round: counts.sensors_per_round,

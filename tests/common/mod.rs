@@ -67,7 +67,7 @@ pub fn project(path: &str) -> PathBuf {
 }
 
 use glam::Vec3;
-use sensorlight::params::{EstimatorParams, FrameParams};
+use sensorlight::params::{EstimatorParams, FrameParams, Indirect};
 use sensorlight::renderer::{Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
 use sensorlight::scene::obj::Material;
@@ -130,9 +130,9 @@ pub struct Setup {
 /// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
 pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
     Setup {
-        estimator: EstimatorParams { sensor, epsilon, background: Vec3::ZERO },
+        estimator: EstimatorParams { sensor, indirect: Indirect::Epsilon(epsilon), background: Vec3::ZERO },
         rd,
-        frame: FrameParams::every_pixel(epsilon, Vec3::ZERO),
+        frame: FrameParams::every_pixel(Indirect::Epsilon(epsilon), Vec3::ZERO),
     }
 }
 
