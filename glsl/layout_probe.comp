@@ -23,6 +23,9 @@ layout(std430, set = 0, binding = 14) buffer Clusters { GpuCluster clusters[]; }
 layout(std430, set = 0, binding = 15) buffer Commands { GpuDrawCommand commands[]; };
 layout(std430, set = 0, binding = 16) buffer CullPushes { CullPush cull_pushes[]; };
 layout(std430, set = 0, binding = 17) buffer CullNodes { GpuCullNode cull_nodes[]; };
+layout(std430, set = 0, binding = 18) buffer CacheGrids { GpuCacheGrid cache_grids[]; };
+layout(std430, set = 0, binding = 19) buffer CacheSlots { GpuCacheSlot cache_slots[]; };
+layout(std430, set = 0, binding = 20) buffer CacheSplits { GpuCacheSplit cache_splits[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -44,4 +47,7 @@ void main() {
     commands[1] = commands[0];
     cull_pushes[1] = cull_pushes[0];
     cull_nodes[1] = cull_nodes[0];
+    cache_grids[1] = cache_grids[0];
+    cache_slots[1] = cache_slots[0];
+    cache_splits[1] = cache_splits[0];
 }

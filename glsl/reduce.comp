@@ -92,9 +92,9 @@ void main() {
         }
         vec3 n = sensors[sensor].n.xyz;
         // Zoom texel weights: cos(theta) d(omega) of each texel, from its direction d through the view plane
-        // at distance 1: area * (n . d) / |d|^4, area = (2 tan / rd)^2.
-        float tan_half = zoom.right.w;
-        float area = (2.0 * tan_half / float(rd)) * (2.0 * tan_half / float(rd));
+        // at distance 1: area * (n . d) / |d|^4, area = (2 tan_x / rd) (2 tan_y / rd).
+        vec2 tan_half = vec2(zoom.right.w, zoom.up.w);
+        float area = (2.0 * tan_half.x / float(rd)) * (2.0 * tan_half.y / float(rd));
         float id = float(g + 1u);
         ivec3 with_scene = map_origin(sensor, push.main_layers + 2u * g);
         ivec3 alone = map_origin(sensor, push.main_layers + 2u * g + 1u);
@@ -104,7 +104,7 @@ void main() {
             float ndc_y = (float(y) + 0.5) * (2.0 / float(rd)) - 1.0;
             for (uint x = thread.x; x < rd; x += 8u) {
                 float ndc_x = (float(x) + 0.5) * (2.0 / float(rd)) - 1.0;
-                vec3 d = zoom.forward.xyz + zoom.right.xyz * (ndc_x * tan_half) - zoom.up.xyz * (ndc_y * tan_half);
+                vec3 d = zoom.forward.xyz + zoom.right.xyz * (ndc_x * tan_half.x) - zoom.up.xyz * (ndc_y * tan_half.y);
                 float len2 = dot(d, d);
                 float w = max(dot(n, d), 0.0) * area / (len2 * len2);
                 visible += imageLoad(sensor_maps, with_scene + ivec3(x, y, 0)).a == id ? w : 0.0;

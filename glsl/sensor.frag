@@ -2,12 +2,26 @@
 // Sensor maps: each texel stores Ck (paper §III-C) as the vertex shader prepared it for the side seen, and
 // in alpha the light group + 1 of an emitter's front (0 otherwise), from which the reduction measures each
 // group's visibility. The clear colour is the background radiance, for texels that see no geometry.
+//
+// With global illumination (push.cache) every surface also returns the light it reflects, read from the
+// radiance cache at the point seen (cache.glsl): on an emitter's front divided by the maps' emission scale
+// as its Ke is, since the reduction multiplies those texels back.
+#include "cache.glsl"
 
 layout(location = 0) flat in vec3 in_ck_front;
 layout(location = 1) flat in vec3 in_ck_back;
 layout(location = 2) flat in float in_group;
+layout(location = 3) in vec3 in_world;
+layout(location = 4) flat in uint in_surface;
+layout(location = 5) flat in vec3 in_eye;
 layout(location = 0) out vec4 out_ck;
+
+layout(push_constant) uniform Push { SensorPush push; };
 
 void main() {
     out_ck = gl_FrontFacing ? vec4(in_ck_front, in_group) : vec4(in_ck_back, 0.0);
+    if (push.cache != 0u) {
+        vec3 reflected = cached_radiance(in_world, in_eye, in_surface, gl_FrontFacing);
+        out_ck.rgb += out_ck.a > 0.0 ? reflected / push.emission_scale : reflected;
+    }
 }

@@ -4,7 +4,9 @@
 // that the fragment shader (sensor.frag) only picks one by gl_FrontFacing:
 //   back, or front of a non-emitter: Kd * epsilon;
 //   front of an emitter: Ke (the paper's estimator), or 0 and its light group (the exact one, whose
-//   emitter light is computed in closed form and only its visibility read from the map).
+//   emitter light is computed in closed form and only its visibility read from the map);
+// with global illumination (push.cache, epsilon 0) the fragment shader adds the radiance cache's reflected
+// light at the point seen, on either side.
 #ifndef SENSOR_COMMON_GLSL
 #define SENSOR_COMMON_GLSL
 #include "types.glsl"
@@ -19,6 +21,9 @@ layout(push_constant) uniform Push { SensorPush push; };
 layout(location = 0) flat out vec3 out_ck_front;
 layout(location = 1) flat out vec3 out_ck_back;
 layout(location = 2) flat out float out_group;  // light group + 1 of an emitter, else 0
+layout(location = 3) out vec3 out_world;        // where the texel sees the surface: the cache's key
+layout(location = 4) flat out uint out_surface;
+layout(location = 5) flat out vec3 out_eye;          // the view's origin
 
 // Clip-space position of this vertex in `view`, its distances to the view's clip planes, and the triangle's
 // two sides.
@@ -35,6 +40,9 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
     out_ck_back = s.kd.rgb * push.epsilon;
     out_ck_front = emitter ? (push.exact != 0u ? vec3(0.0) : s.ke.rgb / push.emission_scale) : out_ck_back;
     out_group = emitter ? s.ke.w : 0.0;
+    out_world = in_position;
+    out_surface = in_surface;
+    out_eye = view.eye.xyz;
     return view.view_proj * p;
 }
 #endif

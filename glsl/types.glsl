@@ -16,6 +16,7 @@ struct GBufferPush {
 struct GpuSensorView {
     mat4 view_proj;
     vec4 clip[4];  // keep dot(clip[k], vec4(p, 1)) >= 0
+    vec4 eye;      // where it looks from (w unused)
     uint layer;    // layer of the sensor-map array
     uint flags;    // VIEW_EMITTERS_ONLY
     uint _pad[2];
@@ -31,8 +32,8 @@ struct GpuSensor {
 };
 
 struct GpuZoom {
-    vec4 right;    // w: tan of half the field of view
-    vec4 up;
+    vec4 right;    // w: tan of half the field of view along right
+    vec4 up;       // w: along up
     vec4 forward;  // w: 1 where the group can be seen
 };
 
@@ -76,7 +77,32 @@ struct SensorPush {
     uint layer_base;     // subtracted from a view's layer (layered strategies)
     uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
     float emission_scale;  // the paper's: emitter fronts leave Ke / emission_scale (a power of two, f16 range)
+    uint cache;          // 1: surfaces return the radiance cache's reflected light (cache.glsl); 0: Kd * epsilon
 };
+
+// The radiance cache's grid (src/gi): the head of the table buffer, its slots after it.
+struct GpuCacheGrid {
+    vec4 origin;   // w: 1 / cell size
+    uvec4 dims;    // cells along x, y, z; w: slots - 1
+    uint entries;  // values[entries + 2 * surface + side]: a surface side's fallback
+    uint _pad[3];
+};
+
+// key = (packed cell, surface); key.y == 0: an empty slot. entry: CACHE_SPLIT | split, or a pair of entries.
+struct GpuCacheSlot {
+    uvec2 key;
+    uint entry;
+    uint _pad;
+};
+
+// Fragments with dot(plane, vec4(p, 1)) >= 0 go on to children[1], the others to children[0].
+struct GpuCacheSplit {
+    vec4 plane;
+    uvec2 children;
+    uint _pad[2];
+};
+
+const uint CACHE_SPLIT = 0x80000000u;
 
 struct ReducePush {
     uint rd;             // sensor map side

@@ -10,9 +10,10 @@ use ash::vk;
 use glam::{Vec3, Vec4};
 
 use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
+use crate::gi::RadianceCache;
 use crate::gpu_types::{
-    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCluster, GpuCullNode, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSurface,
-    MAX_GROUPS, NODE_LEAF, Vertex,
+    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode, GpuEmitter,
+    GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene};
@@ -35,6 +36,42 @@ pub struct GpuScene {
     pub lights: Lights,
     /// The cluster hierarchy, when the scene is drawn from it.
     pub clusters: Option<GpuClusters>,
+    /// The radiance cache the sensor maps read with global illumination.
+    pub cache: GpuCache,
+}
+
+/// The radiance cache on the GPU (docs/DESIGN.md §10): the table the sensor maps' fragment shader looks keys
+/// up in (`glsl/cache.glsl`), and the values it reads, which the renderer writes between bounces (no batch
+/// in flight). Without global illumination an empty table that no shader reads (their push says so), so that
+/// every pipeline binds the same.
+pub struct GpuCache {
+    /// `GpuCacheGrid`, then its `GpuCacheSlot`s.
+    pub table: Arc<Buffer>,
+    /// `vec4` per entry, then a fallback per surface side.
+    pub values: Arc<Buffer>,
+    /// `GpuCacheSplit`s: the planes that cut pieces.
+    pub splits: Arc<Buffer>,
+}
+
+impl GpuCache {
+    pub fn upload(device: &Arc<Device>, cache: Option<&RadianceCache>, surfaces: usize) -> Result<Self> {
+        let (head, slots, splits, values) = match cache {
+            Some(c) => (c.gpu_grid(), c.slots.clone(), c.gpu_splits(), c.values_len()),
+            None => {
+                let empty = vec![GpuCacheSlot::default(); 16];
+                let head = GpuCacheGrid { dims: [1, 1, 1, empty.len() as u32 - 1], ..Default::default() };
+                (head, empty, vec![GpuCacheSplit::default()], 2 * (surfaces + 1))
+            }
+        };
+        let mut table: Vec<u8> = bytemuck::bytes_of(&head).to_vec();
+        table.extend_from_slice(bytemuck::cast_slice(&slots));
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            table: Arc::new(transfer::upload(device, "radiance cache table", &table, storage)?),
+            values: Arc::new(transfer::upload(device, "radiance cache values", &vec![Vec4::ZERO; values], storage)?),
+            splits: Arc::new(transfer::upload(device, "radiance cache splits", &splits, storage)?),
+        })
+    }
 }
 
 /// A mesh's cluster hierarchy on the GPU: its own (welded) vertices, the triangles of every level as
@@ -167,8 +204,14 @@ pub fn gpu_cull_nodes(tree: &CullTree) -> Vec<GpuCullNode> {
 }
 
 impl GpuScene {
-    /// The scene, drawn at full detail (the G-buffer always is), and from `hierarchy` if given.
-    pub fn upload(device: &Arc<Device>, scene: &Scene, hierarchy: Option<&ClusterMesh>) -> Result<Self> {
+    /// The scene, drawn at full detail (the G-buffer always is), and from `hierarchy` if given; `cache`: the
+    /// radiance cache's table, with global illumination.
+    pub fn upload(
+        device: &Arc<Device>,
+        scene: &Scene,
+        hierarchy: Option<&ClusterMesh>,
+        cache: Option<&RadianceCache>,
+    ) -> Result<Self> {
         let mesh = &scene.mesh;
         let vertices = vertices(mesh);
         let lights = Lights::new(mesh);
@@ -211,6 +254,7 @@ impl GpuScene {
             groups: Arc::new(transfer::upload(device, "light groups", &groups, storage)?),
             lights,
             clusters: hierarchy.map(|h| GpuClusters::upload(device, mesh, h)).transpose()?,
+            cache: GpuCache::upload(device, cache, mesh.surfaces.len())?,
         })
     }
 }

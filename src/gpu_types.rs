@@ -41,6 +41,9 @@ pub struct GpuSensorView {
     /// Planes `(m, d)` keeping `m·p + d ≥ 0`: the horizon `(n, −n·origin)` for hemicube side faces and zoom
     /// views, the frustum's four sides for a frustum sensor's zoom views; `(0,0,0,1)` clips nothing.
     pub clip: [Vec4; 4],
+    /// Where the view looks from (w unused): the radiance cache decides which side of a split plane a
+    /// fragment lies on a little towards it, so that a seam never reads the far side (`glsl/cache.glsl`).
+    pub eye: Vec4,
     /// Layer of the sensor-map array this view writes (within its sensor until a strategy places it).
     pub layer: u32,
     /// [`VIEW_EMITTERS_ONLY`] or 0.
@@ -67,8 +70,8 @@ pub struct GpuSensor {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuZoom {
-    /// Unit axes of the view; `right.w` = tan of half its field of view, `forward.w` = 1 where the group
-    /// can be seen at all (else the group sends nothing and the view is empty).
+    /// Unit axes of the view; `right.w` and `up.w`: tan of half its field of view along each, `forward.w` = 1
+    /// where the group can be seen at all (else the group sends nothing and the view is empty).
     pub right: Vec4,
     pub up: Vec4,
     pub forward: Vec4,
@@ -150,6 +153,44 @@ pub struct SensorPush {
     /// The paper's estimator: emitter fronts leave `Ke / emission_scale`, a power of two that keeps them
     /// within the half-float maps' range (`passes::sensor_maps::emission_scale`).
     pub emission_scale: f32,
+    /// 1: every surface returns the radiance cache's reflected light where the texel sees it (global
+    /// illumination, docs/DESIGN.md §10) instead of `Kd·ε`; 0: `Kd·ε`.
+    pub cache: u32,
+}
+
+/// The radiance cache's grid and table as the sensor maps' fragment shader reads them (`gi`): the head of the
+/// table buffer, followed by its [`GpuCacheSlot`]s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCacheGrid {
+    /// xyz: the grid's corner; w: 1 / cell size.
+    pub origin: Vec4,
+    /// Cells along x, y, z; w: slots − 1 (the table's size is a power of two).
+    pub dims: [u32; 4],
+    /// Entries of the values buffer before the per-surface fallbacks (`entries + 2·surface + side`).
+    pub entries: u32,
+    pub _pad: [u32; 3],
+}
+
+/// One slot of the cache's open-addressing table: a key (cell and surface) and where its fragments find
+/// their pair of entries (`gi::SPLIT` | a split's index, or the pair's); `key[1] == 0` marks an empty slot
+/// (surface 0 is no surface).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuCacheSlot {
+    pub key: [u32; 2],
+    pub entry: u32,
+    pub _pad: u32,
+}
+
+/// A piece of the cache split by a plane (`gi::Split`): fragments with `plane · (p, 1) ≥ 0` go on to
+/// `children[1]`, the others to `children[0]`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCacheSplit {
+    pub plane: Vec4,
+    pub children: [u32; 2],
+    pub _pad: [u32; 2],
 }
 
 /// Push constants of the reduction: the map geometry (workgroup i reduces sensor i of the batch).
@@ -207,17 +248,18 @@ pub mod radiance_state {
 }
 
 impl GpuSensorView {
-    /// A view of the whole scene clipped by `clip` (at most 4 planes).
-    pub fn new(view_proj: Mat4, clip: &[Vec4], layer: u32) -> Self {
+    /// A view from `eye` of the whole scene clipped by `clip` (at most 4 planes).
+    pub fn new(view_proj: Mat4, eye: glam::Vec3, clip: &[Vec4], layer: u32) -> Self {
         let mut planes = [Vec4::W; 4];
         planes[..clip.len()].copy_from_slice(clip);
-        Self { view_proj, clip: planes, layer, flags: 0, _pad: [0; 2] }
+        Self { view_proj, clip: planes, eye: eye.extend(1.0), layer, flags: 0, _pad: [0; 2] }
     }
 
     /// A view that draws nothing (its clip plane rejects every point): fills unused multiview slots and the
     /// zoom views of groups a sensor cannot see.
     pub fn empty(layer: u32) -> Self {
-        Self { view_proj: Mat4::IDENTITY, clip: [-Vec4::W, Vec4::W, Vec4::W, Vec4::W], layer, flags: 0, _pad: [0; 2] }
+        let clip = [-Vec4::W, Vec4::W, Vec4::W, Vec4::W];
+        Self { view_proj: Mat4::IDENTITY, clip, eye: Vec4::W, layer, flags: 0, _pad: [0; 2] }
     }
 
     pub fn emitters_only(mut self) -> Self {

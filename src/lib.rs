@@ -10,6 +10,7 @@
 //!   strategy, self-checked and measured per device;
 //! - [`reference`](mod@reference): the CPU ray-casting reference of the same estimator; [`light`]: closed forms it is
 //!   tested against (exact polygon irradiance);
+//! - [`gi`]: global illumination, the radiance cache the sensors fill and see, bounce by bounce;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
 //! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user.
 
@@ -17,6 +18,7 @@ pub mod bench;
 pub mod clusters;
 pub mod errors;
 pub mod gbuffer;
+pub mod gi;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod light;

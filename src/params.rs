@@ -51,6 +51,13 @@ impl<T: fmt::Display> fmt::Display for EstimatorDefault<T> {
     }
 }
 pub const DEFAULT_TILE: u32 = 16;
+/// The radiance cache's cells along the scene's longest side (docs/ACCURACY.md: error against time).
+pub const DEFAULT_CACHE_RESOLUTION: u32 = 16;
+/// rd of the radiance cache's sensors after its first bounce: they see only the smooth light surfaces
+/// reflect, which the camera's sensors then gather (docs/ACCURACY.md).
+pub const DEFAULT_CACHE_SENSOR_SIZE: u32 = 16;
+/// The most cells along an axis the cache's keys hold (`gi::grid::MAX_CELLS`, less the corner's offset).
+pub const MAX_CACHE_RESOLUTION: u32 = 1022;
 pub const DEFAULT_DRADIANCE: f32 = 0.2;
 pub const DEFAULT_EXPOSURE: f32 = 0.0;
 pub const DEFAULT_ESTIMATOR: EstimatorKind = EstimatorKind::Exact;
@@ -190,6 +197,8 @@ pub enum Param {
     Tile,
     Dradiance,
     FilterRadius,
+    CacheResolution,
+    CacheSensorSize,
     Exposure,
     Samples,
 }
@@ -208,6 +217,8 @@ impl Param {
             Self::Tile => "--tile",
             Self::Dradiance => "--dradiance",
             Self::FilterRadius => "--filter-radius",
+            Self::CacheResolution => "--cache-resolution",
+            Self::CacheSensorSize => "--cache-sensor-size",
             Self::Exposure => "--exposure",
             Self::Samples => "--samples",
         }
@@ -234,6 +245,8 @@ impl Param {
             Self::Tile => "tile",
             Self::Dradiance => "dradiance",
             Self::FilterRadius => "filter_radius",
+            Self::CacheResolution => "cache_resolution",
+            Self::CacheSensorSize => "cache_sensor_size",
             Self::Exposure => "exposure",
             Self::Samples => "samples",
         }
@@ -288,6 +301,8 @@ pub struct Overrides {
     pub tile: Option<u32>,
     pub dradiance: Option<f32>,
     pub filter_radius: Option<u32>,
+    pub cache_resolution: Option<u32>,
+    pub cache_sensor_size: Option<u32>,
     pub exposure: Option<f32>,
 }
 
@@ -355,6 +370,11 @@ impl Overrides {
                 ),
             );
         }
+        if let Some(n) = self.cache_resolution
+            && !(1..=MAX_CACHE_RESOLUTION).contains(&n)
+        {
+            return fail(Param::CacheResolution, format!("must be 1 to {MAX_CACHE_RESOLUTION} cells, got {n}"));
+        }
         if let Some(x) = self.exposure
             && !x.is_finite()
         {
@@ -416,6 +436,14 @@ pub struct RenderParams {
     pub tile: u32,
     pub dradiance: f32,
     pub filter_radius: u32,
+    /// Global illumination: the radiance cache's cells along the scene's longest side, 1 to
+    /// [`MAX_CACHE_RESOLUTION`]; 8–32 typical. The cache's sensors (about 2 per cell of surface, so 4× for
+    /// twice the resolution) are sensed once per bounce; the camera's sensors gather it, so it may be
+    /// coarse.
+    pub cache_resolution: u32,
+    /// rd of the radiance cache's sensors after its first bounce (which measures the direct light at
+    /// `sensor_size`), 2 … the device's largest image side (even for hemicubes); 8–32 typical.
+    pub cache_sensor_size: u32,
     /// Exposure of the PNG preview in stops (the EXR is never scaled).
     pub exposure: f32,
     /// Where each value that was set came from (absent: the default).
@@ -475,6 +503,8 @@ impl RenderParams {
         let dradiance = resolve!(dradiance, Param::Dradiance, DEFAULT_DRADIANCE);
         let filter_radius =
             resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS.for_estimator(estimator_kind));
+        let cache_resolution = resolve!(cache_resolution, Param::CacheResolution, DEFAULT_CACHE_RESOLUTION);
+        let cache_sensor_size = resolve!(cache_sensor_size, Param::CacheSensorSize, DEFAULT_CACHE_SENSOR_SIZE);
         let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
         let sensor = SensorKind::new(shape, fov);
         let params = Self {
@@ -484,11 +514,16 @@ impl RenderParams {
             tile,
             dradiance,
             filter_radius,
+            cache_resolution,
+            cache_sensor_size,
             exposure,
             origins,
         };
         if let Some(problem) = sensor.size_problem(sensor_size, u32::MAX) {
             return Err(params.attribute(ParamError::new(Param::SensorSize, problem)));
+        }
+        if let Some(problem) = sensor.size_problem(cache_sensor_size, u32::MAX) {
+            return Err(params.attribute(ParamError::new(Param::CacheSensorSize, problem)));
         }
         Ok(params)
     }
@@ -636,6 +671,11 @@ mod tests {
             (Overrides { dradiance: Some(f32::NAN), ..Default::default() }, Param::Dradiance),
             (Overrides { sensor_size: Some(15), ..Default::default() }, Param::SensorSize),
             (Overrides { filter_radius: Some(MAX_FILTER_RADIUS + 1), ..Default::default() }, Param::FilterRadius),
+            (Overrides { cache_resolution: Some(0), ..Default::default() }, Param::CacheResolution),
+            (
+                Overrides { cache_resolution: Some(MAX_CACHE_RESOLUTION + 1), ..Default::default() },
+                Param::CacheResolution,
+            ),
         ];
         for (values, param) in bad {
             let as_flag = RenderParams::resolve(None, &values).unwrap_err();

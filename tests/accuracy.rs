@@ -10,7 +10,7 @@ use glam::Vec4;
 use sensorlight::output::compare::{Agreement, Picture, agreement};
 use sensorlight::params::{EstimatorKind, Indirect};
 use sensorlight::reference::integrator::Integrator;
-use sensorlight::renderer::{Quiet, Renderer};
+use sensorlight::renderer::{CacheConfig, Quiet, Renderer};
 use sensorlight::scene::{ImageSize, Scene};
 use sensorlight::sensors::SensorKind;
 
@@ -60,6 +60,7 @@ fn render_exact(scene: &Scene, size: ImageSize, setup: &common::Setup) -> sensor
     common::gpu(|device| {
         let mut renderer = Renderer::builder(device, scene, setup.estimator.sensor, setup.rd)
             .estimator(EstimatorKind::Exact)
+            .radiance_cache(setup.cache)
             .build_unchecked(Default::default())
             .unwrap();
         renderer.render(size, &setup.frame, &Quiet).unwrap()
@@ -73,7 +74,7 @@ fn defaults(scene_file: &str) -> common::Setup {
     let scene = Scene::load(&path).unwrap();
     let table = sensorlight::params::Overrides::from_scene_table(&path, &scene.render).unwrap();
     let p = sensorlight::params::RenderParams::resolve(Some((&path, &table)), &Default::default()).unwrap();
-    common::Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame() }
+    common::Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: CacheConfig::for_params(&p) }
 }
 
 fn within_one_percent(a: &Agreement) {

@@ -12,7 +12,7 @@ use sensorlight::scene::{ImageSize, NO_SURFACE, Scene};
 
 fn gpu_gbuffer(scene: &Scene, size: ImageSize) -> GBufferData {
     common::gpu(|device| {
-        let gpu_scene = GpuScene::upload(device, scene, None).unwrap();
+        let gpu_scene = GpuScene::upload(device, scene, None, None).unwrap();
         let pass = GBufferPass::new(device, &gpu_scene).unwrap();
         let near = gbuffer::NEAR * scene.mesh.scale();
         pass.render(device, &gpu_scene, &scene.camera, size, near).unwrap().read_back(device).unwrap()

@@ -19,12 +19,13 @@ const RULES: &[(&str, &[&str])] = &[
     ("clusters", &["scene"]),
     ("sensors", &["scene", "gbuffer", "gpu_types", "light"]),
     ("params", &["sensors"]),
+    ("gi", &["scene", "gpu_types", "params"]),
     // The oracle: CPU only, never a GPU pass.
     ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.
-    ("gpu_scene", &["vk", "scene", "gpu_types", "light", "clusters"]),
+    ("gpu_scene", &["vk", "scene", "gpu_types", "light", "clusters", "gi"]),
     (
         "passes",
         &["vk", "scene", "gbuffer", "sensors", "gpu_types", "gpu_scene", "strategy", "shaders", "light", "clusters"],
@@ -44,6 +45,7 @@ const RULES: &[(&str, &[&str])] = &[
             "shaders",
             "light",
             "clusters",
+            "gi",
         ],
     ),
     // Users of the renderer.

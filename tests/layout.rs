@@ -5,9 +5,9 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    CullPush, EmitterPush, GBufferPush, GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk,
-    GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush,
-    SensorPush,
+    CullPush, EmitterPush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode,
+    GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView,
+    GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -83,8 +83,8 @@ fn shared_structs_match_glsl() {
     let rust = [
         (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
-        (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, layer, flags, _pad)),
-        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, exact, emission_scale)),
+        (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, eye, layer, flags, _pad)),
+        (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, exact, emission_scale, cache)),
         (
             4,
             "ReducePush",
@@ -153,6 +153,9 @@ fn shared_structs_match_glsl() {
                 _pad
             ),
         ),
+        (18, "GpuCacheGrid", rust_layout!(GpuCacheGrid: origin, dims, entries, _pad)),
+        (19, "GpuCacheSlot", rust_layout!(GpuCacheSlot: key, entry, _pad)),
+        (20, "GpuCacheSplit", rust_layout!(GpuCacheSplit: plane, children, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

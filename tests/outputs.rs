@@ -174,6 +174,7 @@ fn without_times(mut stats: serde_json::Value) -> serde_json::Value {
         assert!(stats.get(key).is_some(), "{key} missing");
         stats[key] = serde_json::Value::Null;
     }
+    assert!(stats["gi"]["bounces"].as_u64().is_some(), "the default render has global illumination");
     stats
 }
 

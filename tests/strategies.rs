@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 use sensorlight::params::{EstimatorKind, FrameParams};
-use sensorlight::passes::sensor_maps::{StrategyDesc, unsupported};
+use sensorlight::passes::sensor_maps::{EmitterFronts, StrategyDesc, unsupported};
 use sensorlight::renderer::{self, Renderer, probe_pixels};
 use sensorlight::scene::ImageSize;
 use sensorlight::sensors::SensorKind;
@@ -53,7 +53,8 @@ fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, estimator: Est
             .strategy(StrategyRequest::Fixed(kind))
             .build();
         let groups = if estimator == EXACT { 1 } else { 0 }; // the lightbox has one light
-        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, rd, budget: 1 << 24 };
+        let fronts = if estimator == EXACT { EmitterFronts::Group } else { EmitterFronts::Emission };
+        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, fronts, rd, budget: 1 << 24 };
         if let Some(why) = unsupported(kind, device, &desc) {
             let message = named.err().map(|e| e.to_string()).unwrap_or_default();
             assert!(message.contains("cannot run") && message.contains(&why), "{kind}: {message}");
@@ -221,6 +222,7 @@ fn every_strategy_renders_the_shipped_scenes_alike_at_defaults() {
             let render = |kind| {
                 let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
                     .estimator(params.estimator_kind)
+                    .radiance_cache(renderer::CacheConfig::for_params(&params))
                     .build_unchecked(kind)
                     .unwrap();
                 let out = renderer.render(size, &params.frame(), &renderer::Quiet).unwrap();

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::output::png;
-use sensorlight::renderer::{Phase, Progress, RoundDone, Snapshot};
+use sensorlight::renderer::{BounceDone, Phase, Progress, RoundDone, Snapshot};
 
 use super::say;
 
@@ -31,6 +31,9 @@ pub const ESTIMATE_ABOVE: Duration = Duration::from_secs(10);
 /// the real count, so the estimate is said as this range, centred on [`SENSORS_TYPICAL`].
 pub const SENSORS_OVER_FIRST_GRID: (f64, f64) = (35.0, 110.0);
 pub const SENSORS_TYPICAL: f64 = 60.0;
+
+/// The phase name of the radiance cache's bounces.
+const BOUNCES: &str = "radiance cache";
 
 /// Where a render's previews go: `path` rewritten after every `every` rounds.
 pub struct Preview {
@@ -58,6 +61,8 @@ struct State {
     pixels: u64,
     resolved: u64,
     round: u32,
+    /// The radiance cache's bounce being sensed (global illumination), before the rounds.
+    bounce: u32,
     round_queued: u64,
     round_done: u64,
     sensors_done: u64,
@@ -155,6 +160,9 @@ impl Shared {
         if s.round > 0 && s.phase == "sensing" {
             what = format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued);
         }
+        if s.bounce > 0 && s.phase == BOUNCES {
+            what = format!("radiance cache, bounce {}: {}/{} sensors", s.bounce, s.round_done, s.round_queued);
+        }
         if let Some(rate) = rate.filter(|_| s.sensors_done > 0) {
             what += &format!(", {rate:.0} sensors/s");
         }
@@ -227,6 +235,7 @@ impl Progress for RenderProgress {
             let mut s = self.shared.lock();
             s.phase = match phase {
                 Phase::GBuffer => "G-buffer",
+                Phase::Bounces => BOUNCES,
                 Phase::Sensing => "sensing",
                 Phase::Post => "interpolation, filter, composition",
             };
@@ -240,9 +249,13 @@ impl Progress for RenderProgress {
     fn queued(&self, n: u64) {
         {
             let mut s = self.shared.lock();
-            s.round += 1;
             (s.round_queued, s.round_done) = (n, 0);
-            s.first_grid.get_or_insert(n);
+            if s.phase == BOUNCES {
+                s.bounce += 1;
+            } else {
+                s.round += 1;
+                s.first_grid.get_or_insert(n);
+            }
         }
         if let Some(text) = self.shared.estimate() {
             self.say(&text);
@@ -271,6 +284,13 @@ impl Progress for RenderProgress {
             self.say(&format!("round {}: {} sensors; {percent:.1} % of pixels resolved", round.round, round.sensors));
         }
         self.shared.update(false);
+    }
+
+    fn bounce(&self, bounce: &BounceDone) {
+        if say::verbose() {
+            let change = bounce.change.map_or(String::new(), |c| format!(", the cache moved {:.2} %", 100.0 * c));
+            self.say(&format!("bounce {}: {} cache sensors{change}", bounce.bounce, bounce.sensors));
+        }
     }
 
     fn wants_snapshot(&self, round: u32) -> bool {

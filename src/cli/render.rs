@@ -8,8 +8,11 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
-use sensorlight::params::{DEFAULT_ESTIMATOR, EstimatorKind, Overrides, RenderParams};
-use sensorlight::renderer::{DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
+use sensorlight::params::{
+    DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR, EstimatorKind, MAX_CACHE_RESOLUTION,
+    Overrides, RenderParams,
+};
+use sensorlight::renderer::{CacheConfig, DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event, StrategyRequest};
 
@@ -37,6 +40,16 @@ pub struct RenderArgs {
     sensor_size: Option<u32>,
     #[command(flatten)]
     refinement: RefinementFlags,
+    #[arg(long, help = format!(
+        "Global illumination: the radiance cache's cells along the scene's longest side, 1 to \
+         {MAX_CACHE_RESOLUTION} (sensors per bounce grow with its square) [default: {DEFAULT_CACHE_RESOLUTION}]"
+    ))]
+    cache_resolution: Option<u32>,
+    #[arg(long, help = format!(
+        "Global illumination: rd of the radiance cache's sensors after its first bounce (even for hemicubes) \
+         [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
+    ))]
+    cache_sensor_size: Option<u32>,
     /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*, surface_id
     #[arg(long)]
     aovs: bool,
@@ -71,6 +84,8 @@ impl RenderArgs {
         self.refinement.overrides(self.bounces.overrides(Overrides {
             estimator: self.estimator_kind,
             sensor_size: self.sensor_size,
+            cache_resolution: self.cache_resolution,
+            cache_sensor_size: self.cache_sensor_size,
             exposure: self.image.exposure,
             ..self.estimator.overrides()
         }))
@@ -115,6 +130,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         };
         let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
             .estimator(params.estimator_kind)
+            .radiance_cache(CacheConfig::for_params(&params))
             .memory_budget(args.memory_budget.map(|mib| mib << 20))
             .in_flight(args.in_flight)
             .strategy(args.strategy)
@@ -163,6 +179,24 @@ fn print_stats(s: &RenderStats, wall: Duration) {
         s.strategy,
         s.device
     );
+    if let Some(g) = &s.gi {
+        let change = g.last_change.map_or(String::new(), |c| format!(", last change {:.2} %", 100.0 * c));
+        let tail = g.ratio.map_or(String::new(), |r| {
+            format!(", the rest extrapolated (ratio {r:.3}: {:.1} % of the light)", 100.0 * g.tail_share)
+        });
+        sensorlight::errln!(
+            "global illumination: {} bounce(s) of {} cache sensors (rd {} after the first) in {:.2} s{change}{tail}; \
+             cache {} cells along the longest side ({:.3} each), {} keys, {:.1} KiB",
+            g.bounces,
+            g.entries,
+            g.sensor_size,
+            g.seconds.0 + g.seconds.1,
+            g.resolution,
+            g.cell,
+            g.keys,
+            g.cache_bytes as f64 / 1024.0
+        );
+    }
     if say::verbose() {
         print_details(s);
     }
@@ -193,9 +227,18 @@ fn print_details(s: &RenderStats) {
         }
         _ => "no GPU timestamps".into(),
     };
+    let cache = match &s.gi {
+        Some(_) => format!(
+            "radiance cache {:.2} s (first bounce {:.2} s, the others {:.2} s), ",
+            t.cache_direct_seconds + t.cache_bounces_seconds,
+            t.cache_direct_seconds,
+            t.cache_bounces_seconds
+        ),
+        None => String::new(),
+    };
     sensorlight::errln!(
-        "{:.2} s total, sensor time {:.4} ms (total / sensors): G-buffer {:.2} s, sensing {:.2} s (host: record \
-         {:.2} s, wait {:.2} s, refine {:.2} s; {gpu}), post {:.2} s; {}",
+        "{:.2} s total, sensor time {:.4} ms (total / sensors): {cache}G-buffer {:.2} s, sensing {:.2} s (host: \
+         record {:.2} s, wait {:.2} s, refine {:.2} s; {gpu}), post {:.2} s; {}",
         s.total_seconds,
         s.sensor_time_ms,
         t.gbuffer_seconds,

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::params::RenderParams;
+use crate::params::{FrameParams, Indirect, RenderParams};
 use crate::renderer::{Progress, RenderStats, Renderer};
 use crate::scene::{ImageSize, Scene};
 use crate::strategy::{Cache, StrategyRequest};
@@ -139,7 +139,8 @@ pub fn run(
     each: &mut dyn FnMut(&Run),
 ) -> Result<Vec<Run>> {
     let sensor = config.params.estimator.sensor;
-    let frame = config.params.frame();
+    // The paper's experiment: its ε, whatever model the scene file asks `render` for.
+    let frame = FrameParams { indirect: Indirect::Epsilon(config.epsilon), ..config.params.frame() };
     let mut results = Vec::new();
     let mut current: Option<(u32, Renderer)> = None;
     for (experiment, rd, size) in config.runs() {

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use anyhow::Result;
 use ash::vk;
 
-use super::sensor_maps::MapLayout;
+use super::sensor_maps::{MapLayout, StrategyDesc};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::ReducePush;
 use crate::sensors::layout::SensorLayout;
@@ -48,9 +48,10 @@ pub struct ReduceBindings<'a> {
 }
 
 impl ReducePass {
-    /// For sensors of `layout` and size `rd` in `scene`, with one descriptor set for each of `slots` batches
-    /// in flight.
-    pub fn new(device: &Arc<Device>, scene: &GpuScene, layout: SensorLayout, rd: u32, slots: u32) -> Result<Self> {
+    /// For sensors described by `desc` in `scene`, with one descriptor set for each of `slots` batches in
+    /// flight.
+    pub fn new(device: &Arc<Device>, scene: &GpuScene, desc: &StrategyDesc, slots: u32) -> Result<Self> {
+        let (layout, rd) = (desc.layout, desc.rd);
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut bindings = vec![(0, vk::DescriptorType::STORAGE_IMAGE)];
         bindings.extend((1..=8).map(|b| (b, storage)));
@@ -58,7 +59,7 @@ impl ReducePass {
             ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
         let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
         let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        let emission_scale = super::sensor_maps::emission_scale(scene, &layout);
+        let emission_scale = super::sensor_maps::emission_scale(scene, desc.fronts);
         Ok(Self {
             kernel,
             weights,

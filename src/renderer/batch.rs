@@ -123,8 +123,9 @@ impl BatchRunner {
         ensure!(in_flight >= 1, "at least one batch must be in flight");
         let strategy = sensor_maps::create(kind, device, scene, desc)?;
         let capacity = strategy.capacity() as u64;
-        let reduce = ReducePass::new(device, scene, desc.layout, desc.rd, in_flight)?;
-        let emitters = desc.exact().then(|| EmitterPass::new(device, scene, in_flight)).transpose()?;
+        let reduce = ReducePass::new(device, scene, &desc, in_flight)?;
+        let measures = desc.exact() && desc.layout.groups > 0;
+        let emitters = measures.then(|| EmitterPass::new(device, scene, in_flight)).transpose()?;
         let irradiance_bytes = emitters.as_ref().map_or(0, |e| e.bytes_per_sensor()) * capacity;
         let groups: Vec<Aabb> =
             scene.lights.groups.iter().take(desc.layout.groups as usize).map(|g| g.bounds).collect();
@@ -205,6 +206,11 @@ impl BatchRunner {
         self.strategy.kind()
     }
 
+    /// rd of its sensor maps.
+    pub fn sensor_size(&self) -> u32 {
+        self.desc.rd
+    }
+
     /// Sensors per batch.
     pub fn capacity(&self) -> u32 {
         self.strategy.capacity()
@@ -217,7 +223,7 @@ impl BatchRunner {
 
     /// Whether the sensors measure light groups' visibilities (the exact estimator, a scene with lights).
     pub fn measures_lights(&self) -> bool {
-        self.desc.exact()
+        self.emitters.is_some()
     }
 
     pub fn in_flight(&self) -> u32 {

@@ -8,32 +8,35 @@
 //! [`FrameParams`].
 
 mod batch;
+mod gi;
 mod probe;
 mod stats;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, bail};
+use anyhow::{Context as _, Result, bail};
 use ash::vk;
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 
 use batch::BatchRunner;
 pub use batch::BatchTimes;
+pub use gi::{BounceDone, GiStats};
 pub use probe::probe_pixels;
 pub use stats::{RenderStats, RenderTimes};
 
 use crate::gbuffer::GBufferData;
+use crate::gi::RadianceCache;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
 use crate::light::groups::Lights;
-use crate::params::{EstimatorKind, FrameParams, Param, ParamError};
+use crate::params::{EstimatorKind, FrameParams, Param, ParamError, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::InterpolatePass;
-use crate::passes::sensor_maps::{CkParams, StrategyDesc, TEXEL_BYTES};
+use crate::passes::sensor_maps::{CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene};
 use crate::sensors::SensorKind;
@@ -49,6 +52,8 @@ use crate::vk::{Access, Buffer, Device, barrier, transfer};
 pub enum Phase {
     /// The G-buffer pass and its read-back.
     GBuffer,
+    /// The radiance cache's bounces (global illumination).
+    Bounces,
     /// Rounds of sensing and refinement.
     Sensing,
     /// Interpolation, filter, composition and the read-back of the image.
@@ -87,6 +92,9 @@ pub trait Progress {
     fn done(&self, _n: u64) {}
     /// A round's results were judged.
     fn round(&self, _round: &RoundDone) {}
+    /// A bounce of the radiance cache is done (its sensors were [`Progress::queued`] and [`Progress::done`]
+    /// in [`Phase::Bounces`]).
+    fn bounce(&self, _bounce: &BounceDone) {}
     /// Whether [`Progress::snapshot`] should see round `round` (1-based): building one costs a pass over the
     /// image on the host.
     fn wants_snapshot(&self, _round: u32) -> bool {
@@ -151,6 +159,27 @@ pub struct RendererConfig {
     pub in_flight: u32,
     pub strategy: StrategyRequest,
     pub detail: Detail,
+    /// The radiance cache, for renders with global illumination (`None`: the renderer has none and renders
+    /// the paper's ε only).
+    pub cache: Option<CacheConfig>,
+}
+
+/// The radiance cache of a renderer for global illumination (docs/DESIGN.md §10).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct CacheConfig {
+    /// Cells along the scene's longest side (`params::RenderParams::cache_resolution`).
+    pub resolution: u32,
+    /// rd of the sensors of its bounces after the first, which measure only the light the cache reflects
+    /// (the first measures the direct light at the renderer's own rd).
+    pub sensor_size: u32,
+}
+
+impl CacheConfig {
+    /// The cache `params` ask for: with global illumination, of their resolution and sensor size.
+    pub fn for_params(params: &RenderParams) -> Option<Self> {
+        let (resolution, sensor_size) = (params.cache_resolution, params.cache_sensor_size);
+        params.estimator.indirect.bounces().map(|_| Self { resolution, sensor_size })
+    }
 }
 
 impl RendererConfig {
@@ -221,6 +250,12 @@ impl<'a> RendererBuilder<'a> {
         self
     }
 
+    /// A radiance cache, for global illumination.
+    pub fn radiance_cache(mut self, cache: Option<CacheConfig>) -> Self {
+        self.config.cache = cache;
+        self
+    }
+
     /// Where self-checks and choices are remembered (default: nowhere, everything is measured afresh).
     pub fn cache(mut self, cache: &'a mut Cache) -> Self {
         self.cache = Some(cache);
@@ -279,6 +314,7 @@ pub fn self_check(
         in_flight: DEFAULT_IN_FLIGHT,
         strategy: StrategyRequest::Fixed(kind),
         detail: Detail::Full,
+        cache: None,
     };
     let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
     strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget), kind)
@@ -301,10 +337,19 @@ pub fn unsupported(
         in_flight: DEFAULT_IN_FLIGHT,
         strategy: StrategyRequest::Fixed(kind),
         detail: Detail::Full,
+        cache: None,
     };
     let layout = config.layout(&Lights::new(&scene.mesh));
-    let desc = StrategyDesc { layout, rd, budget: config.batch_budget(device, &layout) };
+    let desc = StrategyDesc { layout, fronts: fronts(estimator), rd, budget: config.batch_budget(device, &layout) };
     crate::passes::sensor_maps::unsupported(kind, device, &desc)
+}
+
+/// What emitter fronts leave in the maps with `estimator`.
+fn fronts(estimator: EstimatorKind) -> EmitterFronts {
+    match estimator {
+        EstimatorKind::Exact => EmitterFronts::Group,
+        EstimatorKind::Paper => EmitterFronts::Emission,
+    }
 }
 
 /// Never an image of NaN with success: whatever produced one (a driver, a bug) is an error, before anything
@@ -327,8 +372,11 @@ fn check_finite(image: &[Vec4], width: usize, driver: &str) -> Result<()> {
 fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
     let limits = &device.adapter.limits;
     let max = limits.max_image_dimension_2d.min(limits.max_framebuffer_width).min(limits.max_framebuffer_height);
-    match config.sensor.size_problem(config.sensor_size, max) {
-        Some(problem) => Err(ParamError::new(Param::SensorSize, problem).into()),
+    if let Some(problem) = config.sensor.size_problem(config.sensor_size, max) {
+        return Err(ParamError::new(Param::SensorSize, problem).into());
+    }
+    match config.cache.and_then(|c| config.sensor.size_problem(c.sensor_size, max)) {
+        Some(problem) => Err(ParamError::new(Param::CacheSensorSize, problem).into()),
         None => Ok(()),
     }
 }
@@ -345,6 +393,8 @@ pub struct Renderer {
     compose: ComposePass,
     gbuffer: GBufferPass,
     scene: GpuScene,
+    /// The radiance cache's points and table, and the runner of its later bounces (with `config.cache`).
+    cache: Option<(RadianceCache, BatchRunner)>,
     camera: Camera,
     /// The scene's diagonal: sensor offsets and near planes are fractions of it.
     scale: f32,
@@ -353,6 +403,8 @@ pub struct Renderer {
     /// How long building took: the strategy's self-checks and measurement (near nothing when cached), then
     /// pipelines and buffers. Not part of any render's own time.
     choice_time: Duration,
+    /// Whether the radiance cache holds a solution ([`Renderer::solve_cache`]).
+    cache_solved: bool,
     device: Arc<Device>,
 }
 
@@ -396,17 +448,35 @@ impl Renderer {
             in_flight: DEFAULT_IN_FLIGHT,
             strategy: StrategyRequest::Auto,
             detail: Detail::Auto,
+            cache: None,
         };
         RendererBuilder { device, scene, config, cache: None, events: None }
     }
 
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
         let scale = scene.mesh.scale();
-        let gpu_scene = GpuScene::upload(device, scene, cluster_hierarchy(device, scene, config.detail).as_ref())?;
+        let hierarchy = cluster_hierarchy(device, scene, config.detail);
+        let cache = config.cache.map(|c| {
+            RadianceCache::build(&scene.mesh, c.resolution, &hierarchy.as_ref().map(lod_triangles).unwrap_or_default())
+        });
+        let gpu_scene = GpuScene::upload(device, scene, hierarchy.as_ref(), cache.as_ref())?;
         let layout = config.layout(&gpu_scene.lights);
-        let budget = config.batch_budget(device, &layout);
-        let desc = StrategyDesc { layout, rd: config.sensor_size, budget };
+        let mut budget = config.batch_budget(device, &layout);
         let offsets = (frame::BIAS * scale, frame::NEAR * scale);
+        // The cache's later bounces: its main layers only, no zoom views (their direct light is the first
+        // bounce's), at their own rd, in a quarter of the budget (no more than all its entries need).
+        let cache = match (cache, config.cache) {
+            (Some(points), Some(c)) => {
+                let layout = SensorLayout { kind: config.sensor, groups: 0 };
+                let all = points.entries.len().max(1) as u64 * layout.layers() as u64 * (c.sensor_size as u64).pow(2);
+                let quarter = (budget / 4).min(all * TEXEL_BYTES);
+                budget -= quarter;
+                let desc = StrategyDesc { layout, fronts: EmitterFronts::Group, rd: c.sensor_size, budget: quarter };
+                Some((points, BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?))
+            }
+            _ => None,
+        };
+        let desc = StrategyDesc { layout, fronts: fronts(config.estimator), rd: config.sensor_size, budget };
         let hints =
             (layout.groups > 0).then(|| (Bvh::build(&scene.mesh.triangles), hints::light_points(&gpu_scene.lights)));
         Ok(Self {
@@ -417,11 +487,13 @@ impl Renderer {
             compose: ComposePass::new(device)?,
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
             scene: gpu_scene,
+            cache,
             camera: scene.camera,
             scale,
             config,
             choice,
             choice_time: Duration::ZERO,
+            cache_solved: false,
             device: device.clone(),
         })
     }
@@ -473,6 +545,28 @@ impl Renderer {
         Ok(self.render_gbuffer(size)?.1)
     }
 
+    /// Senses the radiance cache's bounces for `frame`'s global illumination, leaving the cache for the
+    /// sensor maps that follow ([`Renderer::render`] does this itself; [`Renderer::sense_at`] then sees it).
+    /// An error if the renderer was built without a cache.
+    pub fn solve_cache(&mut self, frame: &FrameParams, progress: &dyn Progress) -> Result<Option<GiStats>> {
+        self.cache_solved = false;
+        let Some(bounces) = frame.indirect.bounces() else { return Ok(None) };
+        let (cache, later) = self.cache.as_mut().context(
+            "this renderer was built without a radiance cache (RendererBuilder::radiance_cache): it renders the \
+             paper's ε only",
+        )?;
+        let runners = gi::Runners { first: &mut self.runner, later };
+        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), bounces, frame.background, progress)?;
+        self.cache_solved = true;
+        Ok(Some(stats))
+    }
+
+    /// What the sensor maps see on surfaces for `frame`: its ε, or the radiance cache once solved.
+    fn ck(&self, frame: &FrameParams) -> CkParams {
+        let cache = self.cache_solved && frame.indirect.bounces().is_some();
+        CkParams { epsilon: frame.indirect.epsilon(), background: frame.background, cache }
+    }
+
     /// R sensed at `pixels` (surface pixels of the image at `size`), and the host time sensing took
     /// (views, recording, submissions, waits): for the strategy self-check and benchmarks.
     pub fn sense_at(&mut self, size: ImageSize, pixels: &[u32], frame: &FrameParams) -> Result<(Vec<Vec4>, Duration)> {
@@ -483,7 +577,7 @@ impl Renderer {
         let mut deliver =
             |p: &[u32], found: &[GpuSensorResult]| p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
         let start = Instant::now();
-        let ck = CkParams { epsilon: frame.indirect.epsilon(), background: frame.background };
+        let ck = self.ck(frame);
         self.runner.sense(&g, pixels, ck, &mut deliver)?;
         self.runner.drain(&mut deliver)?;
         Ok((pixels.iter().map(|&i| r[i as usize]).collect(), start.elapsed()))
@@ -500,8 +594,11 @@ impl Renderer {
         let start = Instant::now();
         let device = self.device.clone();
         let pixels = size.width as usize * size.height as usize;
+        // The cache first: the camera's sensors see it.
+        let gi = self.solve_cache(frame, progress)?;
 
         progress.phase(Phase::GBuffer);
+        let gbuffer_start = Instant::now();
         let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
         let targets = Targets {
             gbuffer: gpu_gbuffer,
@@ -519,13 +616,13 @@ impl Renderer {
             Ok(())
         })?;
         self.runner.bind(&targets.radiance)?;
-        let gbuffer_time = start.elapsed();
+        let gbuffer_time = gbuffer_start.elapsed();
 
         // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G). The
         // host keeps R only where it sensed: that is all the refinement reads.
         progress.phase(Phase::Sensing);
         let sensing_start = Instant::now();
-        let ck = CkParams { epsilon: frame.indirect.epsilon(), background: frame.background };
+        let ck = self.ck(frame);
         let (refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
         let t = Instant::now();
         let mut refinement = match &self.hints {
@@ -601,7 +698,8 @@ impl Renderer {
         let post_time = post_start.elapsed();
         check_finite(&image, size.width as usize, &device.adapter.driver)?;
 
-        let batches = self.runner.times;
+        let phases = (gbuffer_time, sensing_time, post_time, refine_time);
+        let times = RenderTimes::new(phases, &self.runner.times, gi.as_ref());
         let stats = RenderStats::new(
             &self.device,
             self,
@@ -611,9 +709,10 @@ impl Renderer {
                 sensors_per_round: per_round,
                 readback_bytes_per_round: readback_per_round,
                 interpolated_quads: refinement.interpolated().len() as u64,
+                gi,
             },
             start.elapsed(),
-            RenderTimes::new(gbuffer_time, sensing_time, post_time, refine_time, &batches),
+            times,
         );
         Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
     }
@@ -644,6 +743,16 @@ fn cluster_hierarchy(device: &Device, scene: &Scene, detail: Detail) -> Option<c
     let (hierarchy, _cache_note) = crate::clusters::cache::load_or_build(&scene.mesh, dir.as_deref());
     let bound = crate::clusters::max_selected(&hierarchy) as u32;
     crate::passes::sensor_maps::culling_unsupported(device, bound).is_none().then_some(hierarchy)
+}
+
+/// The triangles of every coarser level of `hierarchy` (what culled sensor maps may draw instead of the
+/// mesh's own), for the radiance cache's keys.
+fn lod_triangles(hierarchy: &crate::clusters::ClusterMesh) -> Vec<([glam::Vec3; 3], crate::scene::SurfaceId)> {
+    let p = |i: u32| glam::Vec3::from(hierarchy.positions[i as usize]);
+    (hierarchy.clusters.iter().filter(|k| !k.is_full_detail()))
+        .flat_map(|k| hierarchy.triangles_of(k))
+        .map(|t| (t.map(p), hierarchy.vertex_surface[t[0] as usize]))
+        .collect()
 }
 
 /// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.

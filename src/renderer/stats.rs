@@ -25,12 +25,14 @@ pub struct RenderStats {
     /// The model of indirect light, as `--bounces` or `--epsilon` name it.
     pub indirect: String,
     pub filter_radius: u32,
-    /// Sensors rendered, in total and per refinement round.
+    /// The camera's sensors, in total and per refinement round.
     pub sensors: u64,
     pub sensors_per_round: Vec<u64>,
     /// Bytes read back to the host after each round: the R of the sensors it placed.
     pub readback_bytes_per_round: Vec<u64>,
     pub interpolated_quads: u64,
+    /// Global illumination: the radiance cache's bounces (its sensors are not in `sensors`).
+    pub gi: Option<super::GiStats>,
     pub batch_size: u32,
     pub batches: u64,
     /// Whether the sensor maps were drawn from the scene's clusters (docs/DESIGN.md §9), and then the
@@ -45,7 +47,7 @@ pub struct RenderStats {
     /// sensor time); a renderer serving several renders reports it with each.
     pub build_seconds: f64,
     pub times: RenderTimes,
-    /// The paper's metric: total time / sensors, in milliseconds.
+    /// The paper's metric: total time / sensors, in milliseconds; the cache's sensors count too.
     pub sensor_time_ms: f64,
 }
 
@@ -53,6 +55,10 @@ pub struct RenderStats {
 /// sensing, the host's own work and its waits are measured on the host, the device's by timestamps.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct RenderTimes {
+    /// Global illumination: the radiance cache's first bounce (the direct light at its entries) and the
+    /// others (0 without).
+    pub cache_direct_seconds: f64,
+    pub cache_bounces_seconds: f64,
     /// The G-buffer pass and its read-back.
     pub gbuffer_seconds: f64,
     /// The rounds of sensing and refinement.
@@ -74,13 +80,14 @@ pub struct RenderTimes {
 
 impl RenderTimes {
     pub(super) fn new(
-        gbuffer: Duration,
-        sensing: Duration,
-        post: Duration,
-        refine: Duration,
+        (gbuffer, sensing, post, refine): (Duration, Duration, Duration, Duration),
         batches: &BatchTimes,
+        gi: Option<&super::GiStats>,
     ) -> Self {
+        let (cache_direct_seconds, cache_bounces_seconds) = gi.map_or((0.0, 0.0), |g| g.seconds);
         Self {
+            cache_direct_seconds,
+            cache_bounces_seconds,
             gbuffer_seconds: gbuffer.as_secs_f64(),
             sensing_seconds: sensing.as_secs_f64(),
             post_seconds: post.as_secs_f64(),
@@ -99,6 +106,7 @@ pub(super) struct Counts {
     pub sensors_per_round: Vec<u64>,
     pub readback_bytes_per_round: Vec<u64>,
     pub interpolated_quads: u64,
+    pub gi: Option<super::GiStats>,
 }
 
 impl RenderStats {
@@ -112,7 +120,8 @@ impl RenderStats {
         times: RenderTimes,
     ) -> Self {
         let total = total.as_secs_f64();
-        let sensors = counts.sensors_per_round.iter().sum();
+        let sensors: u64 = counts.sensors_per_round.iter().sum();
+        let all_sensors = sensors + counts.gi.as_ref().map_or(0, |g| g.entries * g.bounces as u64);
         Self {
             device: device.adapter.name.clone(),
             driver: device.adapter.driver.clone(),
@@ -129,6 +138,7 @@ impl RenderStats {
             sensors_per_round: counts.sensors_per_round,
             readback_bytes_per_round: counts.readback_bytes_per_round,
             interpolated_quads: counts.interpolated_quads,
+            gi: counts.gi,
             batch_size: renderer.batch_size(),
             batches: renderer.runner.times.batches,
             culled: renderer.culled(),
@@ -141,7 +151,7 @@ impl RenderStats {
             total_seconds: total,
             build_seconds: renderer.build_time().as_secs_f64(),
             times,
-            sensor_time_ms: if sensors > 0 { 1e3 * total / sensors as f64 } else { 0.0 },
+            sensor_time_ms: if all_sensors > 0 { 1e3 * total / all_sensors as f64 } else { 0.0 },
         }
     }
 }

@@ -42,7 +42,7 @@ impl BatchViews {
         for frame in frames {
             for v in &main {
                 let clip: &[Vec4] = if v.clip_horizon { &[frame.horizon()] } else { &[] };
-                batch.views.push(GpuSensorView::new(frame.view_proj(v, near), clip, v.layer));
+                batch.views.push(GpuSensorView::new(frame.view_proj(v, near), frame.origin, clip, v.layer));
             }
             // A zoom view is clipped to the sensor's domain, as the exact irradiance it measures the
             // visibility of.
@@ -59,12 +59,12 @@ impl BatchViews {
                 let (scene, alone) = (layout.zoom_layer(g as u32, false), layout.zoom_layer(g as u32, true));
                 match Zoom::towards(frame.origin, frame.n, bounds, frame.b, 2.0 / rd as f32) {
                     Some(zoom) => {
-                        let view = GpuSensorView::new(zoom.view_proj(frame.origin, near), &domain, scene);
+                        let view = GpuSensorView::new(zoom.view_proj(frame.origin, near), frame.origin, &domain, scene);
                         batch.views.push(view);
                         batch.views.push(GpuSensorView { layer: alone, ..view }.emitters_only());
                         batch.zooms.push(GpuZoom {
-                            right: zoom.right.extend(zoom.tan_half),
-                            up: zoom.up.extend(0.0),
+                            right: zoom.right.extend(zoom.tan_half.x),
+                            up: zoom.up.extend(zoom.tan_half.y),
                             forward: zoom.forward.extend(1.0),
                         });
                     }

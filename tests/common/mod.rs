@@ -68,7 +68,7 @@ pub fn project(path: &str) -> PathBuf {
 
 use glam::Vec3;
 use sensorlight::params::{EstimatorParams, FrameParams, Indirect};
-use sensorlight::renderer::{Quiet, RenderOutput, Renderer};
+use sensorlight::renderer::{CacheConfig, Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
 use sensorlight::scene::obj::Material;
 use sensorlight::scene::{Camera, ImageSize, Scene};
@@ -125,6 +125,8 @@ pub struct Setup {
     pub estimator: EstimatorParams,
     pub rd: u32,
     pub frame: FrameParams,
+    /// The radiance cache, for global illumination.
+    pub cache: Option<CacheConfig>,
 }
 
 /// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
@@ -133,6 +135,7 @@ pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
         estimator: EstimatorParams { sensor, indirect: Indirect::Epsilon(epsilon), background: Vec3::ZERO },
         rd,
         frame: FrameParams::every_pixel(Indirect::Epsilon(epsilon), Vec3::ZERO),
+        cache: None,
     }
 }
 
@@ -141,6 +144,7 @@ pub fn render(scene: &Scene, setup: &Setup, budget: Option<u64>) -> RenderOutput
     gpu(|device| {
         let mut renderer = Renderer::builder(device, scene, setup.estimator.sensor, setup.rd)
             .memory_budget(budget)
+            .radiance_cache(setup.cache)
             .build_unchecked(StrategyKind::default())
             .unwrap();
         renderer.render(scene.image, &setup.frame, &Quiet).unwrap()

@@ -22,7 +22,6 @@ use ash::vk;
 
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::SensorPush;
 use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
@@ -88,7 +87,7 @@ impl Strategy for Atlas {
         let rows_used = (count * layers).div_ceil(self.columns);
         let area = vk::Extent2D { width: self.columns * self.desc.rd, height: rows_used * self.desc.rd };
         let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[0], ck, Some(area));
-        let push = SensorPush { epsilon: ck.epsilon, ..Default::default() };
+        let push = ck.push();
         let rd = self.desc.rd;
         for i in 0..count {
             for (j, view) in batch.of(i as usize).iter().enumerate() {

@@ -11,7 +11,6 @@ use anyhow::{Result, ensure};
 
 use super::{CkParams, MapLayout, SensorPipeline, SlotMaps, Strategy, StrategyDesc};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::SensorPush;
 use crate::sensors::views::BatchViews;
 use crate::shaders;
 use crate::strategy::StrategyKind;
@@ -71,7 +70,7 @@ impl Strategy for Layered {
             _ => &slot.framebuffers[0],
         };
         let pass = self.pipeline.begin(enc, slot, framebuffer, ck, None);
-        let push = SensorPush { epsilon: ck.epsilon, ..Default::default() };
+        let push = ck.push();
         self.pipeline.draw_views(&pass, slot, &push, (0, count * batch.per_sensor as u32));
         Ok(())
     }

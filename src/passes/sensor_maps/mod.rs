@@ -54,10 +54,10 @@ const MAP_MAX: f32 = 65504.0;
 /// whose alpha marks an emitter's front): the smallest power of two that keeps the brightest emitter within
 /// [`MAP_FORMAT`]'s range. A power of two changes only the exponent, so nothing is lost (1 for every
 /// emitter up to 65504, so those maps are as before); the exact estimator writes no `Ke` into the maps.
-pub fn emission_scale(scene: &GpuScene, layout: &SensorLayout) -> f32 {
+pub fn emission_scale(scene: &GpuScene, fronts: EmitterFronts) -> f32 {
     let brightest = scene.lights.emitters.iter().map(|e| e.ke.max_element()).fold(0.0, f32::max);
     let mut scale = 1.0f32;
-    while layout.groups == 0 && brightest / scale > MAP_MAX {
+    while fronts == EmitterFronts::Emission && brightest / scale > MAP_MAX {
         scale *= 2.0;
     }
     scale
@@ -72,12 +72,26 @@ pub enum MapLayout {
     Atlas { columns: u32 },
 }
 
-/// What `Ck` is made of besides the scene (paper eq. 1–2): ε for non-emitters, and the background where
-/// a view sees nothing.
+/// What `Ck` is made of besides the scene (paper eq. 1–2): ε for non-emitters, the background where a view
+/// sees nothing, and with global illumination the radiance cache's reflected light on every surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CkParams {
     pub epsilon: f32,
     pub background: Vec3,
+    /// Surfaces return the cache's values (`GpuScene::cache`) as they are now.
+    pub cache: bool,
+}
+
+impl CkParams {
+    /// The paper's `Kd·ε` and `background`, no cache.
+    pub fn epsilon(epsilon: f32, background: Vec3) -> Self {
+        Self { epsilon, background, cache: false }
+    }
+
+    /// The sensor push of these (the rest for the strategy and pipeline to fill in).
+    fn push(&self) -> SensorPush {
+        SensorPush { epsilon: self.epsilon, cache: self.cache as u32, ..Default::default() }
+    }
 }
 
 /// One way of recording a batch of sensor maps.
@@ -93,11 +107,23 @@ pub trait Strategy {
     fn record(&self, enc: &Encoder<'_>, slot: &mut SlotMaps, batch: &BatchViews, ck: CkParams) -> Result<()>;
 }
 
+/// What the front of an emitter leaves in the sensor maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmitterFronts {
+    /// Its `Ke` (the paper's estimator sums it with the rest).
+    Emission,
+    /// 0 and its light group (the exact estimator: the emitters' light is computed in closed form, and with
+    /// light groups their visibility measured in zoom views; without, as the radiance cache's later bounces
+    /// sense, it is not measured at all).
+    Group,
+}
+
 /// Everything a strategy needs to know to size itself.
 #[derive(Clone, Copy, Debug)]
 pub struct StrategyDesc {
-    /// The layers of one sensor (and so whether the estimator is the exact one: it has light groups).
+    /// The layers of one sensor: its main layers and a zoom pair per light group measured.
     pub layout: SensorLayout,
+    pub fronts: EmitterFronts,
     pub rd: u32,
     /// Bytes for one batch's maps and depth.
     pub budget: u64,
@@ -110,7 +136,7 @@ impl StrategyDesc {
 
     /// Whether emitter fronts leave 0 and their group in the maps (the exact estimator).
     pub fn exact(&self) -> bool {
-        self.layout.groups > 0
+        self.fronts == EmitterFronts::Group
     }
 
     /// Sensors one batch may hold: what the memory budget allows (maps, depth and `draw_bytes` of draw lists
@@ -244,9 +270,15 @@ impl SlotMaps {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 2)])?;
+        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 5)])?;
         let set = pool.allocate(&pipeline.layout)?;
-        SetWriter::new(set).storage_buffer(0, &views).storage_buffer(1, &pipeline.surfaces).apply(device);
+        SetWriter::new(set)
+            .storage_buffer(0, &views)
+            .storage_buffer(1, &pipeline.surfaces)
+            .storage_buffer(2, &pipeline.cache[0])
+            .storage_buffer(3, &pipeline.cache[1])
+            .storage_buffer(4, &pipeline.cache[2])
+            .apply(device);
         let draws = pipeline.culled.as_ref().map(|c| DrawLists::new(device, max_views as u32, c)).transpose()?;
         Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, draws, set, _pool: pool })
     }
@@ -349,10 +381,12 @@ struct SensorPipeline {
     pipeline: Pipeline,
     layout: PipelineLayout,
     render_pass: RenderPass,
-    /// The scene's vertices and materials (the slots' descriptor sets name the latter).
+    /// The scene's vertices, materials and radiance cache (the slots' descriptor sets name all but the
+    /// first).
     vertices: Arc<Buffer>,
     vertex_count: u32,
     surfaces: Arc<Buffer>,
+    cache: [Arc<Buffer>; 3],
     /// The exact estimator: emitter fronts leave 0 and their group.
     exact: bool,
     /// The paper's estimator: maps hold `Ke` divided by this ([`emission_scale`]).
@@ -373,12 +407,19 @@ impl SensorPipeline {
     ) -> Result<Self> {
         let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let stage = vk::ShaderStageFlags::VERTEX;
+        let (vertex_stage, fragment_stage) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::FRAGMENT);
+        // Views and materials for the vertex shader, the radiance cache for the fragment shader.
         let layout = PipelineLayout::new(
             device,
-            &[(0, storage, stage), (1, storage, stage)],
+            &[
+                (0, storage, vertex_stage),
+                (1, storage, vertex_stage),
+                (2, storage, fragment_stage),
+                (3, storage, fragment_stage),
+                (4, storage, fragment_stage),
+            ],
             size_of::<SensorPush>() as u32,
-            stage,
+            vertex_stage | fragment_stage,
         )?;
         let pipeline = Pipeline::graphics(
             device,
@@ -400,8 +441,9 @@ impl SensorPipeline {
             vertices: scene.vertices.clone(),
             vertex_count: scene.vertex_count,
             surfaces: scene.surfaces.clone(),
+            cache: [scene.cache.table.clone(), scene.cache.values.clone(), scene.cache.splits.clone()],
             exact: desc.exact(),
-            emission_scale: emission_scale(scene, &desc.layout),
+            emission_scale: emission_scale(scene, desc.fronts),
             culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
                 vertices: c.vertices.clone(),
                 indices: c.indices.clone(),

@@ -112,7 +112,7 @@ impl Strategy for Multiview {
         for g in 0..groups {
             let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[g as usize], ck, None);
             for d in 0..draws {
-                let push = SensorPush { epsilon: ck.epsilon, first_view: (g * draws + d) * k, ..Default::default() };
+                let push = SensorPush { first_view: (g * draws + d) * k, ..ck.push() };
                 self.pipeline.draw(&pass, &push, 1, 0);
             }
         }

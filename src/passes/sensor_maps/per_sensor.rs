@@ -68,7 +68,7 @@ impl Strategy for PerSensor {
         // Sensor i: its own framebuffer, its views, gl_Layer relative to its first layer.
         for i in 0..batch.len() as u32 {
             let pass = self.pipeline.begin(enc, slot, &slot.framebuffers[i as usize], ck, None);
-            let push = SensorPush { epsilon: ck.epsilon, layer_base: i * layers, ..Default::default() };
+            let push = SensorPush { layer_base: i * layers, ..ck.push() };
             self.pipeline.draw_views(&pass, slot, &push, (i * per_sensor, per_sensor));
         }
         Ok(())

@@ -1,0 +1,502 @@
+//! From triangles to cache entries. Each triangle is clipped to every grid cell it meets; the pieces of one
+//! surface in one cell form that cell's *piece* of the surface, and each side of a piece is an entry,
+//! sensed at the point of the piece nearest its area-weighted centroid (on the surface, so that a sensor
+//! there sees what the surface sees).
+//!
+//! **Splits.** A cell is coarser than a wall: the floor of two rooms runs under the wall between them, and a
+//! cell across that wall would mix the lit room's floor with the dark one's. So a piece that another
+//! surface's triangle cuts (its plane leaves a real share of the piece on both sides: a wall standing on the
+//! floor, a box's side, a door above its clearance) is split by that plane, up to [`MAX_SPLITS`] deep, and
+//! each part is an entry of its own; a fragment finds its part by the planes' signs (`glsl/cache.glsl`).
+//! A wall's two sides are apart already: they are two entries of every piece.
+//!
+//! **Aliases.** A piece that only grazes its cell (less than [`MIN_AREA`] of a cell's face) and is not
+//! split has no sensor of its own: it reads the nearest piece of its surface in a neighbouring cell, if
+//! that piece's point can be seen from its own on both sides (so an alias never reaches across a wall), and
+//! is sensed itself otherwise. So does every cell that only a coarser level of detail of the mesh reaches
+//! (its triangles stray from the surface by up to their error). Cells are clipped with a margin of
+//! [`MARGIN`] cells so that rounding at a cell's face cannot put a fragment in a cell without its key.
+//!
+//! Deterministic: pieces are summed in triangle order, splits chosen in triangle order.
+
+use std::collections::HashMap;
+
+use glam::{UVec3, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::grid::Grid;
+use crate::scene::bvh::Bvh;
+use crate::scene::{Aabb, Ray, SurfaceId, Triangle};
+
+/// Below this share of a cell's face, an unsplit piece reads a neighbour's entries.
+pub const MIN_AREA: f32 = 0.05;
+/// A plane splits a piece only if both sides keep at least this share of a cell's face.
+pub const MIN_SPLIT_AREA: f32 = 0.01;
+/// Splits per piece at most (a box's corner on the floor takes two; a thin wall's two faces two).
+pub const MAX_SPLITS: u32 = 3;
+/// Other surfaces' triangles examined for splits per piece (in triangle order): a bound for cells where
+/// two detailed meshes meet.
+const MAX_CANDIDATES: usize = 64;
+/// Cells are clipped this much larger (in cells), so that every cell a fragment may round into has a key.
+pub const MARGIN: f32 = 1e-3;
+/// A reference to a piece's entries: the pair index, or with this bit a split node's index.
+pub const SPLIT: u32 = 1 << 31;
+
+/// One side of one piece of surface: where its sensor sits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Entry {
+    pub point: Vec3,
+    /// Unit normal of this side.
+    pub normal: Vec3,
+    pub surface: SurfaceId,
+    /// The triangles' counter-clockwise side.
+    pub front: bool,
+    /// Area of the piece: its weight in averages.
+    pub area: f32,
+}
+
+/// A piece cut in two by a plane: a fragment at `p` goes to `children[(plane · (p, 1) ≥ 0) as usize]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Split {
+    pub plane: Vec4,
+    /// References ([`SPLIT`] | node, or a pair of entries).
+    pub children: [u32; 2],
+}
+
+/// The grid's pieces: each (cell, surface) key with the reference its fragments start from, the split
+/// nodes, and the entries (pair `k`: entries `2k`, the back, and `2k + 1`, the front).
+pub struct Pieces {
+    /// Sorted by (packed cell, surface).
+    pub keys: Vec<((u32, SurfaceId), u32)>,
+    pub splits: Vec<Split>,
+    pub entries: Vec<Entry>,
+}
+
+/// The packed cell of a key's first word.
+pub fn pack(c: UVec3) -> u32 {
+    c.x | c.y << 10 | c.z << 20
+}
+
+fn unpack(c: u32) -> UVec3 {
+    UVec3::new(c & 1023, (c >> 10) & 1023, c >> 20)
+}
+
+/// A triangle's piece of one cell.
+#[derive(Clone, Copy)]
+struct Clip {
+    cell: u32,
+    surface: SurfaceId,
+    triangle: u32,
+}
+
+/// A piece's entries before they are numbered: a leaf, or a split of two.
+enum Tree {
+    Leaf(Leaf),
+    Split(Vec4, Box<[Tree; 2]>),
+}
+
+/// What a leaf's entry pair needs.
+#[derive(Clone, Copy)]
+struct Leaf {
+    area: f32,
+    centroid: Vec3,
+    point: Vec3,
+    normal: Vec3,
+}
+
+/// Every cell of `grid` within the margin of triangle `v`, with the triangle's piece of it.
+fn cells_of(grid: &Grid, v: &[Vec3; 3]) -> impl Iterator<Item = (UVec3, Polygon)> {
+    let margin = Vec3::splat(MARGIN * grid.cell);
+    let b = Aabb::of(v.iter().copied());
+    let (lo, hi) = (grid.cell_of(b.min - margin), grid.cell_of(b.max + margin));
+    let (grid, v) = (*grid, *v);
+    (lo.z..=hi.z).flat_map(move |z| {
+        (lo.y..=hi.y).flat_map(move |y| {
+            (lo.x..=hi.x).filter_map(move |x| {
+                let c = UVec3::new(x, y, z);
+                let polygon = Polygon::triangle(&v).in_cell(&grid, c);
+                (polygon.len >= 3).then_some((c, polygon))
+            })
+        })
+    })
+}
+
+/// Builds the pieces of the mesh's `triangles` on `grid`; `lod`: triangles of coarser levels of detail,
+/// which add aliases only.
+pub fn build(grid: &Grid, triangles: &[Triangle], lod: &[([Vec3; 3], SurfaceId)]) -> Pieces {
+    let mut clips: Vec<Clip> = triangles
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(t, tri)| {
+            cells_of(grid, &tri.v).map(move |(c, _)| Clip { cell: pack(c), surface: tri.surface, triangle: t as u32 })
+        })
+        .collect();
+    // Stable: within a key, triangle order, so that sums are the same on every run.
+    clips.sort_by_key(|c| (c.cell, c.surface));
+    let runs: Vec<&[Clip]> = clips.chunk_by(|a, b| (a.cell, a.surface) == (b.cell, b.surface)).collect();
+    // The runs of one cell are adjacent: each run's range of them, whose other surfaces may split it.
+    let mut cell_runs: Vec<(usize, usize)> = Vec::with_capacity(runs.len());
+    for group in runs.chunk_by(|a, b| a[0].cell == b[0].cell) {
+        let start = cell_runs.len();
+        cell_runs.extend(std::iter::repeat_n((start, start + group.len()), group.len()));
+    }
+
+    let face = grid.cell * grid.cell;
+    let trees: Vec<Tree> = runs
+        .par_iter()
+        .enumerate()
+        .map(|(i, run)| {
+            let cell = unpack(run[0].cell);
+            let polygons: Vec<(Polygon, Vec3)> = run
+                .iter()
+                .map(|c| {
+                    let t = &triangles[c.triangle as usize];
+                    (Polygon::triangle(&t.v).in_cell(grid, cell), t.normal)
+                })
+                .collect();
+            let surface_normal = polygons.iter().map(|(p, n)| *n * p.area_centroid().0).sum::<Vec3>();
+            let candidates =
+                split_planes(grid, triangles, &runs[cell_runs[i].0..cell_runs[i].1], run[0].surface, surface_normal);
+            split(polygons, &candidates, MAX_SPLITS, MIN_SPLIT_AREA * face)
+        })
+        .collect();
+
+    // Number the entries and splits; note which unsplit pieces are small enough to alias a neighbour.
+    let bvh = Bvh::build(triangles);
+    let mut pieces = Pieces { keys: Vec::with_capacity(runs.len()), splits: Vec::new(), entries: Vec::new() };
+    let mut own: HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)> = HashMap::new();
+    let mut small = Vec::new();
+    let mut references = vec![u32::MAX; runs.len()];
+    for (i, tree) in trees.iter().enumerate() {
+        let key = (runs[i][0].cell, runs[i][0].surface);
+        match tree {
+            Tree::Leaf(leaf) if leaf.area < MIN_AREA * face => small.push(i),
+            _ => {
+                references[i] = pieces.number(tree, key.1);
+                if let Tree::Leaf(leaf) = tree {
+                    own.insert(key, (references[i], leaf.point, leaf.normal));
+                }
+            }
+        }
+    }
+    let clear = |from: Vec3, n: Vec3, to: Vec3, n_to: Vec3| visible(&bvh, grid, from, n, to, n_to);
+    let nearest = |own: &HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)>, key: (u32, SurfaceId), from: Vec3, n: Vec3| {
+        let mut found: Vec<(f32, u32, Vec3, Vec3)> = neighbours(grid, unpack(key.0))
+            .filter_map(|c| own.get(&(pack(c), key.1)).map(|&(r, p, m)| (p.distance_squared(from), r, p, m)))
+            .collect();
+        found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        found.into_iter().find(|&(_, _, p, m)| clear(from, n, p, m)).map(|(_, r, _, _)| r)
+    };
+    for &i in &small {
+        let key = (runs[i][0].cell, runs[i][0].surface);
+        let Tree::Leaf(leaf) = &trees[i] else { unreachable!("small pieces are unsplit") };
+        references[i] = match nearest(&own, key, leaf.centroid, leaf.normal) {
+            Some(r) => r,
+            None => pieces.number(&trees[i], key.1),
+        };
+    }
+    pieces.keys.extend(runs.iter().zip(&references).map(|(run, &r)| ((run[0].cell, run[0].surface), r)));
+
+    // Cells only a coarser level reaches read the nearest piece of their surface around them.
+    let known: std::collections::HashSet<(u32, SurfaceId)> = pieces.keys.iter().map(|(k, _)| *k).collect();
+    let mut extra: Vec<((u32, SurfaceId), Vec3, Vec3)> = lod
+        .par_iter()
+        .flat_map_iter(|(v, surface)| {
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            cells_of(grid, v).map(move |(c, polygon)| ((pack(c), *surface), polygon.area_centroid().1, n))
+        })
+        .filter(|(k, _, _)| !known.contains(k))
+        .collect();
+    extra.sort_by_key(|(k, _, _)| *k);
+    extra.dedup_by_key(|(k, _, _)| *k);
+    for (key, from, n) in extra {
+        if let Some(r) = nearest(&own, key, from, n) {
+            pieces.keys.push((key, r));
+        }
+    }
+    pieces.keys.sort_by_key(|(k, _)| *k);
+    pieces
+}
+
+impl Pieces {
+    /// Numbers `tree`'s entries and splits (of `surface`); returns the reference its fragments start from.
+    fn number(&mut self, tree: &Tree, surface: SurfaceId) -> u32 {
+        match tree {
+            Tree::Leaf(l) => {
+                let pair = (self.entries.len() / 2) as u32;
+                let (point, area) = (l.point, l.area);
+                self.entries.push(Entry { point, normal: -l.normal, surface, front: false, area });
+                self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
+                pair
+            }
+            Tree::Split(plane, children) => {
+                let node = self.splits.len();
+                self.splits.push(Split { plane: *plane, children: [0; 2] });
+                let children = [self.number(&children[0], surface), self.number(&children[1], surface)];
+                self.splits[node].children = children;
+                SPLIT | node as u32
+            }
+        }
+    }
+}
+
+/// Planes of other surfaces' triangles in this cell (`cell`: its runs) that may split `surface`'s piece,
+/// whose area-weighted normal is `normal`: not parallel to it, each once.
+fn split_planes(grid: &Grid, triangles: &[Triangle], cell: &[&[Clip]], surface: SurfaceId, normal: Vec3) -> Vec<Vec4> {
+    let n = normal.normalize_or_zero();
+    let mut planes: Vec<Vec4> = Vec::new();
+    let others = cell.iter().filter(|run| run[0].surface != surface).flat_map(|run| run.iter());
+    for clip in others.take(MAX_CANDIDATES) {
+        let t = &triangles[clip.triangle as usize];
+        if t.normal.dot(n).abs() > 0.999 {
+            continue; // parallel: it cannot cut the piece (a shelf above the floor)
+        }
+        let plane = t.normal.extend(-t.normal.dot(t.v[0]));
+        let same = |q: &Vec4| q.truncate().dot(plane.truncate()) > 0.9999 && (q.w - plane.w).abs() < 1e-4 * grid.cell;
+        if !planes.iter().any(same) {
+            planes.push(plane);
+        }
+    }
+    planes
+}
+
+/// `polygons` (each with its triangle's normal) split by the first of `planes` that leaves at least `min`
+/// of area on both sides, then each side by the rest, `depth` levels at most.
+fn split(polygons: Vec<(Polygon, Vec3)>, planes: &[Vec4], depth: u32, min: f32) -> Tree {
+    if depth > 0 {
+        for (k, plane) in planes.iter().enumerate() {
+            let mut sides: [Vec<(Polygon, Vec3)>; 2] = [Vec::new(), Vec::new()];
+            for (p, n) in &polygons {
+                for (side, part) in p.split(*plane).into_iter().enumerate() {
+                    if part.len >= 3 {
+                        sides[side].push((part, *n));
+                    }
+                }
+            }
+            let area = |s: &[(Polygon, Vec3)]| s.iter().map(|(p, _)| p.area_centroid().0).sum::<f32>();
+            if area(&sides[0]) >= min && area(&sides[1]) >= min {
+                let rest = &planes[k + 1..];
+                let [below, above] = sides;
+                let children = [split(below, rest, depth - 1, min), split(above, rest, depth - 1, min)];
+                return Tree::Split(*plane, Box::new(children));
+            }
+        }
+    }
+    Tree::Leaf(leaf(&polygons))
+}
+
+/// A leaf's area, centroid, sensor point (its point nearest the centroid) and area-weighted normal.
+fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
+    let (mut area, mut weighted, mut normal) = (0.0, Vec3::ZERO, Vec3::ZERO);
+    for (p, n) in polygons {
+        let (a, c) = p.area_centroid();
+        area += a;
+        weighted += c * a;
+        normal += *n * a.max(f32::MIN_POSITIVE);
+    }
+    let centroid = if area > 0.0 {
+        weighted / area
+    } else {
+        polygons.iter().map(|(p, _)| p.area_centroid().1).sum::<Vec3>() / polygons.len() as f32
+    };
+    let point = polygons
+        .iter()
+        .map(|(p, _)| p.closest(centroid))
+        .min_by(|a, b| a.distance_squared(centroid).total_cmp(&b.distance_squared(centroid)))
+        .unwrap_or(centroid);
+    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1) }
+}
+
+/// Whether `to` (on a surface of normal `n_to`) can be seen from `from` (normal `n`) on both sides: the
+/// segments between the points lifted a little along their normals, and along their opposites.
+fn visible(bvh: &Bvh, grid: &Grid, from: Vec3, n: Vec3, to: Vec3, n_to: Vec3) -> bool {
+    let lift = 1e-3 * grid.cell;
+    [1.0, -1.0].iter().all(|&side| {
+        let (a, b) = (from + n * (side * lift), to + n_to * (side * lift));
+        let d = b - a;
+        let length = d.length();
+        length <= lift || bvh.intersect(&Ray::new(a, d / length), 0.0, length * (1.0 - 1e-4)).is_none()
+    })
+}
+
+/// The 3³ cells around `c` (itself included) inside the grid.
+fn neighbours(grid: &Grid, c: UVec3) -> impl Iterator<Item = UVec3> {
+    let dims = grid.dims.as_ivec3();
+    let c = c.as_ivec3();
+    (-1..=1).flat_map(move |z| {
+        (-1..=1).flat_map(move |y| {
+            (-1..=1).filter_map(move |x| {
+                let n = c + glam::IVec3::new(x, y, z);
+                (n.cmpge(glam::IVec3::ZERO).all() && n.cmplt(dims).all()).then(|| n.as_uvec3())
+            })
+        })
+    })
+}
+
+/// A convex polygon of at most 9 vertices: a triangle clipped by the 6 planes of a box.
+#[derive(Clone, Copy, Debug)]
+pub struct Polygon {
+    v: [Vec3; 9],
+    len: usize,
+}
+
+impl Polygon {
+    fn triangle(v: &[Vec3; 3]) -> Self {
+        let mut p = Self { v: [Vec3::ZERO; 9], len: 3 };
+        p.v[..3].copy_from_slice(v);
+        p
+    }
+
+    /// Its part within cell `c` of `grid`, with the margin.
+    fn in_cell(self, grid: &Grid, c: UVec3) -> Self {
+        let b = grid.cell_box(c);
+        let margin = Vec3::splat(MARGIN * grid.cell);
+        self.clipped(b.min - margin, b.max + margin)
+    }
+
+    /// Sutherland–Hodgman against the box `[lo, hi]`.
+    fn clipped(mut self, lo: Vec3, hi: Vec3) -> Self {
+        for axis in 0..3 {
+            let (mut min, mut max) = (Vec4::ZERO, Vec4::ZERO);
+            min[axis] = 1.0;
+            min.w = -lo[axis];
+            max[axis] = -1.0;
+            max.w = hi[axis];
+            self = self.keep(min).keep(max);
+            if self.len < 3 {
+                break;
+            }
+        }
+        self
+    }
+
+    /// The parts below and above `plane` (`plane · (p, 1) < 0` and `≥ 0`).
+    fn split(&self, plane: Vec4) -> [Self; 2] {
+        [self.keep(-plane), self.keep(plane)]
+    }
+
+    /// The part where `plane · (p, 1) ≥ 0`.
+    fn keep(&self, plane: Vec4) -> Self {
+        let mut out = Self { v: [Vec3::ZERO; 9], len: 0 };
+        let distance = |p: Vec3| plane.truncate().dot(p) + plane.w;
+        for i in 0..self.len {
+            let (a, b) = (self.v[i], self.v[(i + 1) % self.len]);
+            let (da, db) = (distance(a), distance(b));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        out
+    }
+
+    fn push(&mut self, p: Vec3) {
+        if self.len < self.v.len() {
+            self.v[self.len] = p;
+            self.len += 1;
+        }
+    }
+
+    /// Area and area-weighted centroid (the vertices' mean where the area is 0).
+    fn area_centroid(&self) -> (f32, Vec3) {
+        if self.len < 3 {
+            return (0.0, self.v[..self.len].iter().sum::<Vec3>() / self.len.max(1) as f32);
+        }
+        let (mut area, mut weighted) = (0.0, Vec3::ZERO);
+        for i in 1..self.len - 1 {
+            let (a, b, c) = (self.v[0], self.v[i], self.v[i + 1]);
+            let t = 0.5 * (b - a).cross(c - a).length();
+            area += t;
+            weighted += t * (a + b + c) / 3.0;
+        }
+        if area > 0.0 {
+            (area, weighted / area)
+        } else {
+            (0.0, self.v[..self.len].iter().sum::<Vec3>() / self.len as f32)
+        }
+    }
+
+    /// Its point nearest `p`. Clipping leaves repeated and collinear corners, whose fan triangles have no
+    /// area (the closest-point formulas divide by it): those count by their corners.
+    fn closest(&self, p: Vec3) -> Vec3 {
+        let nearer = |a: &Vec3, b: &Vec3| a.distance_squared(p).total_cmp(&b.distance_squared(p));
+        let corners = self.v[..self.len].iter().copied();
+        (1..self.len.saturating_sub(1))
+            .map(|i| closest_on_triangle(p, self.v[0], self.v[i], self.v[i + 1]))
+            .filter(|q| q.is_finite())
+            .chain(corners)
+            .min_by(nearer)
+            .unwrap_or(p)
+    }
+}
+
+/// The point of triangle `abc` nearest `p` (Ericson, *Real-Time Collision Detection* §5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_clipped_square_keeps_the_area_inside_the_box() {
+        let t = [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)];
+        let p = Polygon::triangle(&t).clipped(Vec3::splat(-1.0), Vec3::ONE);
+        let (area, centroid) = p.area_centroid();
+        assert!((area - 1.0).abs() < 1e-6, "{area}: the unit square lies wholly under the hypotenuse");
+        assert!((centroid - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6);
+        let (whole, _) = Polygon::triangle(&t).area_centroid();
+        assert!((whole - 2.0).abs() < 1e-6);
+        assert!(Polygon::triangle(&t).clipped(Vec3::splat(3.0), Vec3::splat(4.0)).len < 3);
+        let [below, above] = Polygon::triangle(&t).split(Vec4::new(1.0, 0.0, 0.0, -0.5));
+        let (a, b) = (below.area_centroid().0, above.area_centroid().0);
+        assert!((a + b - 2.0).abs() < 1e-6 && (b - 1.125).abs() < 1e-6, "{a} + {b}");
+    }
+
+    #[test]
+    fn the_closest_point_lies_on_the_triangle() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let inside = closest_on_triangle(Vec3::new(0.2, 0.2, 5.0), a, b, c);
+        assert!((inside - Vec3::new(0.2, 0.2, 0.0)).length() < 1e-6, "{inside}");
+        assert_eq!(closest_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c), a);
+        let on_edge = closest_on_triangle(Vec3::new(1.0, 1.0, 0.0), a, b, c);
+        assert!((on_edge - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6);
+        // A clipped square with a repeated corner.
+        let mut square = Polygon::triangle(&[a, a, b]);
+        square.push(Vec3::new(1.0, 1.0, 0.0));
+        square.push(c);
+        let q = square.closest(Vec3::new(0.5, 0.5, 1.0));
+        assert!((q - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6, "{q}");
+    }
+}

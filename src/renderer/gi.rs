@@ -1,0 +1,163 @@
+//! The radiance cache's bounces on the GPU (docs/DESIGN.md §10): every cache entry is a sensor, sensed by
+//! the render's own batch runner (strategy, exact estimator, culling) as if it were a pixel of a one-row
+//! image, and the solver turns what they measured into the cache the next bounce, and then the camera's
+//! sensors, see.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result};
+use glam::{Vec3, Vec4};
+use serde::Serialize;
+
+use super::batch::BatchRunner;
+use super::{Phase, Progress, map_buffer};
+use crate::gbuffer::GBufferData;
+use crate::gi::RadianceCache;
+use crate::gi::solve::{Next, Solver};
+use crate::gpu_scene::GpuCache;
+use crate::gpu_types::GpuSensorResult;
+use crate::params::Bounces;
+use crate::passes::sensor_maps::CkParams;
+use crate::scene::ImageSize;
+use crate::vk::{Device, transfer};
+
+/// A bounce done: for progress displays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BounceDone {
+    /// 1-based.
+    pub bounce: u32,
+    pub sensors: u64,
+    /// How much the cache's estimate moved, relative (luminance × area); `None` after the first.
+    pub change: Option<f64>,
+}
+
+/// What the bounces did, for the statistics.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct GiStats {
+    /// Bounces sensed.
+    pub bounces: u32,
+    /// Cache entries (sensors per bounce), keys in its table, and its bytes on the GPU.
+    pub entries: u64,
+    pub keys: u64,
+    pub cache_bytes: u64,
+    /// Cells along the scene's longest side, and their size.
+    pub resolution: u32,
+    pub cell: f32,
+    /// The last bounce's relative change of the cache (auto: of its extrapolated estimate).
+    pub last_change: Option<f64>,
+    /// auto: the ratio λ by which bounces shrink, and the share of the cache's light its tail adds.
+    pub ratio: Option<f64>,
+    pub tail_share: f64,
+    /// rd of the sensors of the bounces after the first.
+    pub sensor_size: u32,
+    /// Wall time of the first bounce (the direct light at every entry, zoom views and all) and of the
+    /// others (its maps only), for `RenderTimes`.
+    #[serde(skip)]
+    pub seconds: (f64, f64),
+}
+
+/// The cache entries as a one-row G-buffer: the batch runner places a sensor at each entry's point, facing
+/// its side.
+fn entries_as_gbuffer(cache: &RadianceCache) -> GBufferData {
+    let n = cache.entries.len();
+    let (mut position, mut normal) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for e in &cache.entries {
+        position.push(e.point.extend(1.0));
+        normal.push(e.normal.extend(e.front as u32 as f32));
+    }
+    GBufferData {
+        size: ImageSize { width: n as u32, height: 1 },
+        position,
+        normal,
+        albedo: cache.albedo.iter().map(|a| a.extend(1.0)).collect(),
+        emission: vec![Vec4::ZERO; n],
+        surface: cache.entries.iter().map(|e| e.surface).collect(),
+    }
+}
+
+/// The runners the bounces sense with: the render's own for the first (direct light, through the exact
+/// estimator's zoom views at the render's rd), and the cache's for the others, which measure only what the
+/// maps see on surfaces and the background, with smaller maps.
+pub(super) struct Runners<'a> {
+    pub first: &'a mut BatchRunner,
+    pub later: &'a mut BatchRunner,
+}
+
+/// R at every entry from one sensing pass of `runner` with `ck`.
+fn sense(runner: &mut BatchRunner, g: &GBufferData, ck: CkParams, progress: &dyn Progress) -> Result<Vec<Vec3>> {
+    let n = g.position.len();
+    let all: Vec<u32> = (0..n as u32).collect();
+    let mut r = vec![Vec3::ZERO; n];
+    let mut deliver = |p: &[u32], found: &[GpuSensorResult]| {
+        p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r.truncate());
+        progress.done(p.len() as u64);
+    };
+    runner.sense(g, &all, ck, &mut deliver)?;
+    runner.drain(&mut deliver)?;
+    Ok(r)
+}
+
+/// Senses the cache's bounces and leaves the result in `gpu.values`; `background`: radiance of rays leaving
+/// the scene.
+///
+/// Bounce 1's R at an entry is its direct light (emitters only, the background black: the only pass with
+/// zoom views and the emitter pass) and what it sees of the background. Bounce k adds what its maps see of
+/// the light bounce k − 1 added to the cache, `Δ_{k−1}`: transport is linear, so `R_k = R_{k−1} + T·Δ_{k−1}`.
+/// The maps then hold each bounce's addition in half floats to its own precision, not the cache's sum (whose
+/// rounding, at 1e-3 of ρ = 0.9's sum, would drown the small late additions the tail is measured from).
+pub(super) fn solve(
+    device: &Arc<Device>,
+    runners: Runners<'_>,
+    (cache, gpu): (&RadianceCache, &GpuCache),
+    bounces: Bounces,
+    background: Vec3,
+    progress: &dyn Progress,
+) -> Result<GiStats> {
+    let start = Instant::now();
+    progress.phase(Phase::Bounces);
+    let n = cache.entries.len();
+    let g = entries_as_gbuffer(cache);
+    let radiance = Arc::new(map_buffer(device, "radiance cache R", g.size)?);
+    runners.first.bind(&radiance)?;
+    runners.later.bind(&radiance)?;
+    let tol = std::env::var("GI_TOL").ok().and_then(|t| t.parse().ok()).unwrap_or(crate::gi::solve::DEFAULT_TOLERANCE);
+    let mut solver = Solver::new(bounces, tol, n);
+    progress.queued(n as u64);
+    let mut r = sense(runners.first, &g, CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false }, progress)?;
+    let first = start.elapsed().as_secs_f64();
+    if background != Vec3::ZERO {
+        let sky = sense(runners.later, &g, CkParams { epsilon: 0.0, background, cache: false }, progress)?;
+        r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
+    }
+    loop {
+        let bounce = solver.bounces() + 1;
+        if bounce > 1 {
+            progress.queued(n as u64);
+            let added =
+                sense(runners.later, &g, CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: true }, progress)?;
+            r.iter_mut().zip(added).for_each(|(r, a)| *r += a);
+        }
+        let next = solver.step(&cache.entries, &cache.albedo, &r);
+        // Between bounces what this one added (the next transports it); at the end the estimate.
+        let values = if next == Next::Done { solver.values() } else { solver.added().to_vec() };
+        transfer::write_buffer(device, &gpu.values, &cache.gpu_values(&values)).context("update the radiance cache")?;
+        progress.bounce(&BounceDone { bounce, sensors: n as u64, change: solver.last_change });
+        if next == Next::Done {
+            break;
+        }
+    }
+    Ok(GiStats {
+        bounces: solver.bounces(),
+        entries: n as u64,
+        keys: cache.keys as u64,
+        cache_bytes: cache.bytes(),
+        resolution: cache.resolution,
+        cell: cache.grid.cell,
+        sensor_size: runners.later.sensor_size(),
+        last_change: solver.last_change,
+        ratio: solver.ratio(),
+        tail_share: solver.tail_share(),
+        seconds: (first, start.elapsed().as_secs_f64() - first),
+    })
+}
