@@ -1,16 +1,25 @@
 #!/usr/bin/env python3
-"""Render a sensorlight scene with Mitsuba 3's `direct` integrator: an independent peer for ε = 0.
+"""Render a sensorlight scene with Mitsuba 3's `direct` or `path` integrator: an independent peer.
 
-With `--epsilon 0`, sensorlight computes exactly direct illumination from one-sided Lambertian area
-lights onto two-sided Lambertian surfaces: pixel = Le + Kd·R, R = (1/π) ∫ Ke cosθ dω over the emitters
-visible from the point. Mitsuba's `direct` integrator (emitter and BSDF sampling, combined by MIS)
-estimates the same quantity with an unrelated code base, so it serves as a peer reference.
+With `--epsilon 0` (or `--bounces 0`), sensorlight computes exactly direct illumination from one-sided
+Lambertian area lights onto two-sided Lambertian surfaces: pixel = Le + Kd·R, R = (1/π) ∫ Ke cosθ dω over
+the emitters visible from the point. Mitsuba's `direct` integrator (emitter and BSDF sampling, combined by
+MIS) estimates the same quantity with an unrelated code base, so it serves as a peer reference.
+
+With global illumination (`--bounces N|auto`), R integrates the light every surface really reflects,
+L = Le + Kd·R, recursively. `--integrator path` renders that with Mitsuba's `path` integrator (emitter and
+BSDF sampling by MIS at every vertex, Russian roulette from depth `--rr-depth`, default Mitsuba's 5, which
+is unbiased): `--max-depth D` with D = N + 2 for sensorlight's N indirect bounces (depth 1: the emitters
+seen; 2: their direct light; each further depth one bounce), `--max-depth -1` (the default) for
+`--bounces auto`.
 
 Usage (Mitsuba lives in a venv outside the repository):
 
     python3 -m venv /work/venv-mitsuba && /work/venv-mitsuba/bin/pip install mitsuba numpy
     /work/venv-mitsuba/bin/python scripts/peer/mitsuba_direct.py scenes/cornell/cornell.toml \\
         -o cornell-mitsuba.exr --spp 4096
+    /work/venv-mitsuba/bin/python scripts/peer/mitsuba_direct.py scenes/cornell/cornell.toml \\
+        -o cornell-path.exr --integrator path --max-depth 10 --spp 1024     # ↔ reference --bounces 8
 
 The default variant, `llvm_ad_rgb`, JIT-compiles through the system's libLLVM and needs LLVM ≥ 16
 (Dr.Jit emits `llvm.maximum`, which LLVM 14 and 15 cannot lower on x86: the process aborts with "LLVM
@@ -52,7 +61,7 @@ How each convention is matched
   (i + ½, j + ½), exactly where sensorlight's G-buffer samples; it needs an `llvm_*` variant.
 * Sampling: `--spp` samples per pixel with the `independent` sampler seeded by `--seed`; the direct
   integrator takes `--emitter-samples` emitter and `--bsdf-samples` BSDF samples (default 1 each) per
-  camera sample and combines them by MIS. For a dark scene lit in a few pixels (door-ajar),
+  camera sample and combines them by MIS; the path integrator one of each per vertex. For a dark scene lit in a few pixels (door-ajar),
   `--pixel-mask EARLIER.exr` spends the samples on the pixels that an earlier render found lit. `--variant` picks the
   Mitsuba variant (default `llvm_ad_rgb`, the vectorised CPU backend, when available).
 
@@ -67,9 +76,13 @@ What cannot match
 * Noise: Mitsuba is Monte Carlo; its error falls as 1/√spp. Estimate it by rendering twice with
   different `--seed` values (relative RMSE between the two ÷ √2 is the noise of one).
 * Self-intersection offsets and near-plane handling differ between the two renderers; this matters only
-  at contact edges (a box standing on a floor), within a pixel or so of them.
-* Anything a sensorlight scene's `[render]` table sets for the algorithm (sensor kind, ε, …) is
-  irrelevant here: this is always ε = 0, the exact direct illumination.
+  at contact edges (a box standing on a floor), within a pixel or so of them. With `path` it matters at
+  every vertex too: sensorlight's oracle lifts each by 2e-4 of the scene's diagonal and does not see
+  geometry nearer than 1e-4 of it (as its sensors), so a vertex that close to a seam loses a little light
+  through it (≈ 0.05 % of a closed box's); Mitsuba offsets by its own small epsilon.
+* Anything a sensorlight scene's `[render]` table sets for the algorithm (sensor kind, ε, bounces, …) is
+  irrelevant here: `direct` is always ε = 0, the exact direct illumination, and `path` the bounces that
+  `--max-depth` says.
 
 The time taken (scene load, render, total) is printed on stdout, and with `--json` written to a file.
 """
@@ -280,8 +293,15 @@ def choose_variant(requested: str | None, pixel_sampling: str) -> str:
     return variant
 
 
-def build_scene(spec: SceneSpec, spp: int, seed: int, emitter_samples: int = 1, bsdf_samples: int = 1):
-    """The Mitsuba scene: one mesh per material, the camera, the film, the direct integrator."""
+def integrator_dict(kind: str, emitter_samples: int, bsdf_samples: int, max_depth: int, rr_depth: int) -> dict:
+    """Mitsuba's `direct` (emitter + BSDF samples by MIS) or `path` (the same at every vertex, to max_depth)."""
+    if kind == "direct":
+        return {"type": "direct", "emitter_samples": emitter_samples, "bsdf_samples": bsdf_samples}
+    return {"type": "path", "max_depth": max_depth, "rr_depth": rr_depth}
+
+
+def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
+    """The Mitsuba scene: one mesh per material, the camera, the film, the integrator."""
     import mitsuba as mi
     import numpy as np
 
@@ -324,7 +344,7 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, emitter_samples: int = 1, 
     diag = float(np.linalg.norm(hi - lo))
     scene_dict = {
         "type": "scene",
-        "integrator": {"type": "direct", "emitter_samples": emitter_samples, "bsdf_samples": bsdf_samples},
+        "integrator": integrator,
         "sensor": {
             "type": "perspective",
             "fov": spec.vfov_deg,
@@ -451,6 +471,13 @@ def write_exr(path: Path, image, emission) -> None:
     tmp.replace(path)
 
 
+def describe(integrator: dict) -> str:
+    if integrator["type"] == "direct":
+        return "direct"
+    depth = integrator["max_depth"]
+    return f"path to depth {depth if depth >= 0 else '∞'} (roulette from {integrator['rr_depth']})"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawTextHelpFormatter)
     parser.add_argument("scene", type=Path, help="sensorlight scene file (TOML)")
@@ -467,9 +494,28 @@ def main(argv: list[str] | None = None) -> int:
         help="box: box filter over each pixel (default); centre: every sample through the pixel centre",
     )
     parser.add_argument(
-        "--emitter-samples", type=int, default=1, help="emitter (light) samples per camera sample (default 1)"
+        "--integrator",
+        choices=["direct", "path"],
+        default="direct",
+        help="direct: direct light only (sensorlight --epsilon 0 / --bounces 0; the default);\n"
+        "path: global illumination to --max-depth",
     )
-    parser.add_argument("--bsdf-samples", type=int, default=1, help="BSDF samples per camera sample (default 1)")
+    parser.add_argument(
+        "--max-depth",
+        type=int,
+        help="with --integrator path: the longest path, -1 = unbounded (the default; sensorlight --bounces auto);\n"
+        "N + 2 for sensorlight's --bounces N (1: emitters only, 2: direct light)",
+    )
+    parser.add_argument(
+        "--rr-depth",
+        type=int,
+        default=5,
+        help="with --integrator path: the depth from which Russian roulette ends paths (default 5, Mitsuba's)",
+    )
+    parser.add_argument(
+        "--emitter-samples", type=int, help="with direct: emitter (light) samples per camera sample (default 1)"
+    )
+    parser.add_argument("--bsdf-samples", type=int, help="with direct: BSDF samples per camera sample (default 1)")
     parser.add_argument(
         "--pixel-mask",
         type=Path,
@@ -484,8 +530,22 @@ def main(argv: list[str] | None = None) -> int:
     for name in ("width", "height"):
         if getattr(args, name) is not None and getattr(args, name) < 1:
             parser.error(f"--{name} must be at least 1")
-    if args.emitter_samples < 0 or args.bsdf_samples < 0 or args.emitter_samples + args.bsdf_samples == 0:
-        parser.error("--emitter-samples and --bsdf-samples must be ≥ 0, and not both 0")
+    if args.integrator == "path":
+        if args.emitter_samples is not None or args.bsdf_samples is not None:
+            parser.error("--emitter-samples and --bsdf-samples are the direct integrator's (path takes one of each)")
+        if args.max_depth is None:
+            args.max_depth = -1
+        if args.max_depth == 0 or args.max_depth < -1:
+            parser.error(f"--max-depth must be -1 (unbounded) or at least 1, got {args.max_depth}")
+        if args.rr_depth < 1:
+            parser.error(f"--rr-depth must be at least 1, got {args.rr_depth}")
+    else:
+        if args.max_depth is not None:
+            parser.error("--max-depth needs --integrator path (direct is depth 2: direct light only)")
+        args.emitter_samples = 1 if args.emitter_samples is None else args.emitter_samples
+        args.bsdf_samples = 1 if args.bsdf_samples is None else args.bsdf_samples
+        if args.emitter_samples < 0 or args.bsdf_samples < 0 or args.emitter_samples + args.bsdf_samples == 0:
+            parser.error("--emitter-samples and --bsdf-samples must be ≥ 0, and not both 0")
     if args.pixel_mask and args.pixel_sampling != "centre":
         parser.error("--pixel-mask needs --pixel-sampling centre")
     if args.output.suffix.lower() != ".exr":
@@ -509,7 +569,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {w}", file=sys.stderr)
         if spec.mesh.dropped_degenerate:
             print(f"warning: dropped {spec.mesh.dropped_degenerate} degenerate triangle(s)", file=sys.stderr)
-        scene = build_scene(spec, args.spp, args.seed, args.emitter_samples, args.bsdf_samples)
+        integrator = integrator_dict(
+            args.integrator, args.emitter_samples, args.bsdf_samples, args.max_depth, args.rr_depth
+        )
+        scene = build_scene(spec, args.spp, args.seed, integrator)
         only = read_mask(args.pixel_mask, spec) if args.pixel_mask else None
         t1 = time.perf_counter()
         if args.pixel_sampling == "centre":
@@ -530,8 +593,7 @@ def main(argv: list[str] | None = None) -> int:
         "spp": args.spp,
         "seed": args.seed,
         "pixel_sampling": args.pixel_sampling,
-        "emitter_samples": args.emitter_samples,
-        "bsdf_samples": args.bsdf_samples,
+        "integrator": integrator,
         "pixel_mask": str(args.pixel_mask) if args.pixel_mask else None,
         "pixels_rendered": int(only.sum()) if only is not None else spec.width * spec.height,
         "width": spec.width,
@@ -542,7 +604,8 @@ def main(argv: list[str] | None = None) -> int:
         "total_s": round(time.perf_counter() - t0, 4),
     }
     print(
-        f"{args.output}: {spec.width}x{spec.height}, {args.spp} spp, {variant}, {args.pixel_sampling} pixels: "
+        f"{args.output}: {spec.width}x{spec.height}, {args.spp} spp, {variant}, {describe(integrator)}, "
+        f"{args.pixel_sampling} pixels: "
         f"load {timings['load_s']:.3f} s, render {timings['render_s']:.3f} s, total {timings['total_s']:.3f} s"
     )
     if args.json:

@@ -28,7 +28,9 @@ pub struct ReferenceArgs {
     image: ImageFlags,
     /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
     /// direction plus, if the scene has emitters, one point on an emitter, combined by multiple importance
-    /// sampling: up to 2 rays per sample
+    /// sampling (up to 2 rays). With global illumination (--bounces other than 0) the direction is a path:
+    /// at each surface it meets, a point on an emitter and a cosine direction that goes on (up to 2 rays a
+    /// vertex), until N surfaces have reflected it (--bounces N) or Russian roulette (after 3 bounces) ends it
     #[arg(long, default_value_t = 1024)]
     samples: u32,
     /// Seed of the sample scrambling: the same seed writes the same file
@@ -44,9 +46,15 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;
     let integrator = Integrator::new(&scene, params, args.samples, args.seed)?;
-    let strategies = match integrator.emitters() {
-        0 => "a direction each: the scene has no emitters".to_string(),
-        n => format!("a direction + a point on one of {n} emitter triangles each"),
+    super::warn_all(&integrator.warnings());
+    let strategies = match (params.indirect.bounces().is_some(), integrator.emitters()) {
+        (false, 0) => "a direction each: the scene has no emitters".to_string(),
+        (false, n) => format!("a direction + a point on one of {n} emitter triangles each"),
+        (true, 0) => "a path of cosine directions each: the scene has no emitters".to_string(),
+        (true, n) => format!(
+            "a path (a direction; at each surface it meets, a light point and the next direction) + a point on one \
+             of {n} emitter triangles each"
+        ),
     };
     say!(
         "reference: {}x{}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
@@ -63,6 +71,15 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let result = integrator.render(size, &|rows| bar.inc(rows));
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    if let Some(at) = result.image.iter().position(|v| !v.is_finite()) {
+        anyhow::bail!(
+            "pixel ({}, {}) of the reference is not finite ({}): the light (Ke, --background) summed over \
+             samples and bounces exceeds 32-bit floats; lower it",
+            at % size.width as usize,
+            at / size.width as usize,
+            result.image[at]
+        );
+    }
     say!(
         "cast {:.1} M rays in {seconds:.2} s: {:.2} M rays/s on {} threads; noise: mean relative standard error of R {:.3} %",
         result.rays as f64 * 1e-6,

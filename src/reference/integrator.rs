@@ -3,6 +3,12 @@
 //! `R(p) = (1/π) ∫ Ck(ray(p, ω)) cosθ dω`, `Ck = Ke` on the front of an emitter, `Kd·ε` elsewhere,
 //! the background where the ray leaves the scene; pixel = `Le + Kd·R`.
 //!
+//! With global illumination (`Indirect::Bounces`) `Ck(q)` is the radiance that really leaves the first hit
+//! `q`: `Le(q) + Kd(q)·R(q)`, `R(q)` over the whole hemisphere of the side the ray arrived on. Everything
+//! below holds at `p` unchanged; where the direction's ray hits `q`, module `path` traces it on (next-event
+//! estimation at every further vertex, Russian roulette). `--bounces 0` and `--epsilon 0` run the same
+//! code, so they agree bit for bit.
+//!
 //! The domain is the sensor's: the whole hemisphere (hemicube) or the paper's square frustum, turned by the
 //! same [`SensorFrame`] as the GPU sensor (directions outside it count 0). Rays leave from the sensor's
 //! origin `p + n·bias` and, like the GPU views with their near plane, do not see geometry closer than
@@ -28,19 +34,20 @@
 //! itself: exactly the rays on which a direction would have returned that triangle's `Ke`.
 //!
 //! Noise estimate: the samples are split into [`REPLICATES`] independently scrambled Sobol nets (one for the
-//! directions, one for the light points, per replicate); the spread of their means gives an unbiased standard
-//! error of the estimate (randomised quasi-Monte Carlo). Every sample is a pure function of (seed, key,
-//! replicate), so renders are bit-reproducible.
+//! directions, one for the light points, per replicate; a path's further vertices draw from a hashed stream
+//! of the replicate's own key); the spread of their means gives an unbiased standard error of the estimate
+//! (randomised quasi-Monte Carlo). Every sample is a pure function of (seed, key, replicate, sample index,
+//! depth), so renders are bit-reproducible.
 
 use std::f64::consts::PI;
 
 use anyhow::{Result, ensure};
-use glam::{Vec3, Vec4};
+use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::gbuffer;
 use super::lights::{LUMINANCE, Lights};
-use super::sampling::{ScrambledSobol, cosine_hemisphere, hash};
+use super::sampling::{HashedStream, ScrambledSobol, cosine_hemisphere, hash};
 use crate::gbuffer::GBufferData;
 use crate::params::EstimatorParams;
 use crate::scene::bvh::Bvh;
@@ -53,20 +60,23 @@ pub const REPLICATES: u32 = 4;
 
 /// Mixed into a replicate's key to scramble its light points independently of its directions.
 const LIGHT_STREAM: u64 = 0x4c49_4748_5453_0000;
+/// Mixed into a replicate's key for its paths' further vertices.
+const PATH_STREAM: u64 = 0x5041_5448_5300_0000;
 
 pub struct Integrator<'a> {
-    scene: &'a Scene,
-    bvh: Bvh,
-    params: EstimatorParams,
-    /// Samples per point (each a direction and, with emitters, a light point), split over the replicates.
+    pub(super) scene: &'a Scene,
+    pub(super) bvh: Bvh,
+    pub(super) params: EstimatorParams,
+    /// Samples per point (each a direction, or with global illumination a path, and, with emitters, a light
+    /// point), split over the replicates.
     samples: u32,
     seed: u64,
-    bias: f32,
-    near: f32,
+    pub(super) bias: f32,
+    pub(super) near: f32,
     /// Half-width of the frustum on the plane z = 1; `None` for the whole hemisphere.
-    frustum: Option<f32>,
+    pub(super) frustum: Option<f32>,
     /// The emitters to sample; `None` in a scene without any (then only directions are cast).
-    lights: Option<Lights>,
+    pub(super) lights: Option<Lights>,
 }
 
 /// What a ray sees first.
@@ -98,7 +108,8 @@ pub struct ReferenceImage {
 
 impl<'a> Integrator<'a> {
     /// `samples`: samples per point, a multiple of [`REPLICATES`] (powers of two stratify best). Each is one
-    /// cosine-weighted direction plus, when the scene has emitters, one point on an emitter.
+    /// cosine-weighted direction (with global illumination: the path it starts) plus, when the scene has
+    /// emitters, one point on an emitter.
     pub fn new(scene: &'a Scene, params: EstimatorParams, samples: u32, seed: u64) -> Result<Self> {
         ensure!(
             samples >= REPLICATES && samples.is_multiple_of(REPLICATES),
@@ -148,8 +159,8 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// `R` at the surface point `p` with unit normal `n` (facing the viewer). `key` picks the scramble, e.g.
-    /// the pixel index: equal keys give equal results.
+    /// `R` at the surface point `p` with unit normal `n` (facing the viewer), indirect light included with
+    /// global illumination. `key` picks the scramble, e.g. the pixel index: equal keys give equal results.
     pub fn radiance(&self, p: Vec3, n: Vec3, key: u64) -> Estimate {
         self.estimate(p, n, key).0
     }
@@ -158,34 +169,47 @@ impl<'a> Integrator<'a> {
     fn estimate(&self, p: Vec3, n: Vec3, key: u64) -> (Estimate, u64) {
         let sensor = SensorFrame::new(p, n, self.bias);
         let per_replicate = self.samples / REPLICATES;
+        let bounces = self.params.indirect.bounces();
         let mut means = [Vec3::ZERO; REPLICATES as usize];
         let mut rays = 0;
         for (r, mean) in means.iter_mut().enumerate() {
             let replicate = hash(self.seed ^ hash(key)) ^ r as u64;
             let directions = ScrambledSobol::new(replicate);
             let points = ScrambledSobol::new(replicate ^ LIGHT_STREAM);
+            let paths = HashedStream::new(replicate ^ PATH_STREAM);
             let mut sum = Vec3::ZERO;
             for i in 0..per_replicate {
-                sum += self.direction_sample(&sensor, cosine_hemisphere(directions.point(i)), &mut rays);
+                let local = cosine_hemisphere(directions.point(i));
+                sum += match bounces {
+                    None => self.direction_sample(&sensor, local, &mut rays),
+                    Some(bounces) => {
+                        self.path_sample(&sensor, local, bounces, |depth| paths.vertex(i, depth), &mut rays)
+                    }
+                };
                 if let Some(lights) = &self.lights {
-                    sum += self.light_sample(&sensor, lights, points.bits(i), &mut rays);
+                    sum += self.light_sample(&sensor, lights, points.bits(i), self.frustum, &mut rays);
                 }
             }
             *mean = sum / per_replicate as f32;
         }
         let mean = means.iter().sum::<Vec3>() / REPLICATES as f32;
         let variance = means.iter().map(|m| (*m - mean) * (*m - mean)).sum::<Vec3>() / (REPLICATES - 1) as f32;
-        (Estimate { mean, std_error: (variance / REPLICATES as f32).map(f32::sqrt) }, rays)
-    }
-
-    fn inside(&self, local: Vec3) -> bool {
-        local.z > 0.0 && self.frustum.is_none_or(|s| local.x.abs() <= s * local.z && local.y.abs() <= s * local.z)
+        let std_error = if variance.is_finite() {
+            (variance / REPLICATES as f32).map(f32::sqrt)
+        } else {
+            // Squares past f32's range (light many bounces brighter than a Ke near the loader's limit): in f64.
+            let mean = mean.as_dvec3();
+            let variance =
+                means.iter().map(|m| (m.as_dvec3() - mean).powf(2.0)).sum::<DVec3>() / (REPLICATES - 1) as f64;
+            (variance / REPLICATES as f64).map(f64::sqrt).as_vec3()
+        };
+        (Estimate { mean, std_error }, rays)
     }
 
     /// One cosine-distributed direction (`local`, in the sensor frame): `Ck / (cosθ/π) · cosθ/π`, the emitted
     /// part MIS-weighted against the light samples.
     fn direction_sample(&self, sensor: &SensorFrame, local: Vec3, rays: &mut u64) -> Vec3 {
-        if self.frustum.is_some() && !self.inside(local) {
+        if self.frustum.is_some() && !inside(local, self.frustum) {
             return Vec3::ZERO; // outside the paper's square view: the sensor does not see it
         }
         *rays += 1;
@@ -201,8 +225,16 @@ impl<'a> Integrator<'a> {
     }
 
     /// One point on an emitter, from the 32-bit pair `u`: `Ke·cosθ/π / p_l`, MIS-weighted against the
-    /// directions, if the point's front faces the sensor inside its domain and nothing hides it.
-    fn light_sample(&self, sensor: &SensorFrame, lights: &Lights, u: (u32, u32), rays: &mut u64) -> Vec3 {
+    /// directions, if the point's front faces the sensor inside its domain (`frustum`: see
+    /// [`Integrator::frustum`]) and nothing hides it.
+    pub(super) fn light_sample(
+        &self,
+        sensor: &SensorFrame,
+        lights: &Lights,
+        u: (u32, u32),
+        frustum: Option<f32>,
+        rays: &mut u64,
+    ) -> Vec3 {
         let sample = lights.sample(&self.scene.mesh, u);
         let tri = &self.scene.mesh.triangles[sample.triangle as usize];
         let to = sample.point - sensor.origin;
@@ -213,7 +245,7 @@ impl<'a> Integrator<'a> {
         let dir = to / distance;
         let cos_light = -dir.dot(tri.normal);
         let local = Vec3::new(dir.dot(sensor.t), dir.dot(sensor.b), dir.dot(sensor.n));
-        if cos_light <= 0.0 || !self.inside(local) {
+        if cos_light <= 0.0 || !inside(local, frustum) {
             return Vec3::ZERO; // its back (Kd·ε, counted by the directions) or outside the domain
         }
         *rays += 1;
@@ -256,9 +288,15 @@ impl<'a> Integrator<'a> {
     }
 }
 
+/// Whether the direction `local` (sensor frame) lies in the domain: above the horizon and, for a frustum of
+/// half-width `frustum` on the plane z = 1, inside it.
+pub(super) fn inside(local: Vec3, frustum: Option<f32>) -> bool {
+    local.z > 0.0 && frustum.is_none_or(|s| local.x.abs() <= s * local.z && local.y.abs() <= s * local.z)
+}
+
 /// Veach's power heuristic (β = 2) for the strategy of density `own` against `other`, one sample each:
 /// `own² / (own² + other²)`, written as a ratio so that neither overflows.
-fn power_heuristic(own: f64, other: f64) -> f64 {
+pub(super) fn power_heuristic(own: f64, other: f64) -> f64 {
     let r = other / own;
     if r.is_finite() { 1.0 / (1.0 + r * r) } else { 0.0 }
 }
