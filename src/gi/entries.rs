@@ -41,6 +41,22 @@ const MAX_CANDIDATES: usize = 64;
 pub const MARGIN: f32 = 1e-3;
 /// A reference to a piece's entries: the pair index, or with this bit a split node's index.
 pub const SPLIT: u32 = 1 << 31;
+/// Points spread over a piece, stratified by area, at which the light hints say whether its direct light is
+/// uniform over it.
+pub const SAMPLES_PER_PIECE: usize = 8;
+/// Levels of halving a piece whose direct light is not uniform over it, at most: each halves it along its
+/// two longest axes, so 2 levels leave parts a quarter of a cell wide.
+pub const MAX_LIGHT_LEVELS: u32 = 2;
+
+/// A piece is halved where the share of the lights' hint points its spread points see differs by more than
+/// this (`sensors::hints`): a shadow's edge or a streak of light crossing it. Any difference at all would
+/// halve the pieces of every soft penumbra (2.8× the Cornell box's entries for no gain in its error); a
+/// half would miss the streak through a door ajar (docs/ACCURACY.md).
+pub const LIGHT_VARIATION: f32 = 0.25;
+
+/// Whether the direct light varies over these points of a surface of this normal, on either side (the
+/// renderer's light hints: which points on the lights each sees): where it does, a piece is halved.
+pub type LightVaries<'a> = &'a (dyn Fn(&[Vec3], Vec3) -> bool + Sync);
 
 /// One side of one piece of surface: where its sensor sits.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,6 +86,8 @@ pub struct Pieces {
     pub keys: Vec<((u32, SurfaceId), u32)>,
     pub splits: Vec<Split>,
     pub entries: Vec<Entry>,
+    /// Of the splits, those that halve a piece where its direct light varies.
+    pub light_splits: usize,
 }
 
 /// The packed cell of a key's first word.
@@ -89,10 +107,11 @@ struct Clip {
     triangle: u32,
 }
 
-/// A piece's entries before they are numbered: a leaf, or a split of two.
+/// A piece's entries before they are numbered: a leaf, or a split of two (by a wall's plane, or, `lit`, a
+/// halving where the direct light varies).
 enum Tree {
     Leaf(Leaf),
-    Split(Vec4, Box<[Tree; 2]>),
+    Split { plane: Vec4, children: Box<[Tree; 2]>, lit: bool },
 }
 
 /// What a leaf's entry pair needs.
@@ -122,8 +141,13 @@ fn cells_of(grid: &Grid, v: &[Vec3; 3]) -> impl Iterator<Item = (UVec3, Polygon)
 }
 
 /// Builds the pieces of the mesh's `triangles` on `grid`; `lod`: triangles of coarser levels of detail,
-/// which add aliases only.
-pub fn build(grid: &Grid, triangles: &[Triangle], lod: &[([Vec3; 3], SurfaceId)]) -> Pieces {
+/// which add aliases only; `light`: where the direct light varies (pieces are halved there).
+pub fn build(
+    grid: &Grid,
+    triangles: &[Triangle],
+    lod: &[([Vec3; 3], SurfaceId)],
+    light: Option<LightVaries<'_>>,
+) -> Pieces {
     let mut clips: Vec<Clip> = triangles
         .par_iter()
         .enumerate()
@@ -157,13 +181,14 @@ pub fn build(grid: &Grid, triangles: &[Triangle], lod: &[([Vec3; 3], SurfaceId)]
             let surface_normal = polygons.iter().map(|(p, n)| *n * p.area_centroid().0).sum::<Vec3>();
             let candidates =
                 split_planes(grid, triangles, &runs[cell_runs[i].0..cell_runs[i].1], run[0].surface, surface_normal);
-            split(polygons, &candidates, MAX_SPLITS, MIN_SPLIT_AREA * face)
+            split(polygons, &candidates, MAX_SPLITS, MIN_SPLIT_AREA * face, light)
         })
         .collect();
 
     // Number the entries and splits; note which unsplit pieces are small enough to alias a neighbour.
     let bvh = Bvh::build(triangles);
-    let mut pieces = Pieces { keys: Vec::with_capacity(runs.len()), splits: Vec::new(), entries: Vec::new() };
+    let mut pieces =
+        Pieces { keys: Vec::with_capacity(runs.len()), splits: Vec::new(), entries: Vec::new(), light_splits: 0 };
     let mut own: HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)> = HashMap::new();
     let mut small = Vec::new();
     let mut references = vec![u32::MAX; runs.len()];
@@ -229,8 +254,9 @@ impl Pieces {
                 self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
                 pair
             }
-            Tree::Split(plane, children) => {
+            Tree::Split { plane, children, lit } => {
                 let node = self.splits.len();
+                self.light_splits += *lit as usize;
                 self.splits.push(Split { plane: *plane, children: [0; 2] });
                 let children = [self.number(&children[0], surface), self.number(&children[1], surface)];
                 self.splits[node].children = children;
@@ -261,8 +287,14 @@ fn split_planes(grid: &Grid, triangles: &[Triangle], cell: &[&[Clip]], surface: 
 }
 
 /// `polygons` (each with its triangle's normal) split by the first of `planes` that leaves at least `min`
-/// of area on both sides, then each side by the rest, `depth` levels at most.
-fn split(polygons: Vec<(Polygon, Vec3)>, planes: &[Vec4], depth: u32, min: f32) -> Tree {
+/// of area on both sides, then each side by the rest, `depth` levels at most; each part then [`lit`].
+fn split(
+    polygons: Vec<(Polygon, Vec3)>,
+    planes: &[Vec4],
+    depth: u32,
+    min: f32,
+    light: Option<LightVaries<'_>>,
+) -> Tree {
     if depth > 0 {
         for (k, plane) in planes.iter().enumerate() {
             let mut sides: [Vec<(Polygon, Vec3)>; 2] = [Vec::new(), Vec::new()];
@@ -277,12 +309,12 @@ fn split(polygons: Vec<(Polygon, Vec3)>, planes: &[Vec4], depth: u32, min: f32) 
             if area(&sides[0]) >= min && area(&sides[1]) >= min {
                 let rest = &planes[k + 1..];
                 let [below, above] = sides;
-                let children = [split(below, rest, depth - 1, min), split(above, rest, depth - 1, min)];
-                return Tree::Split(*plane, Box::new(children));
+                let children = [split(below, rest, depth - 1, min, light), split(above, rest, depth - 1, min, light)];
+                return Tree::Split { plane: *plane, children: Box::new(children), lit: false };
             }
         }
     }
-    Tree::Leaf(leaf(&polygons))
+    lit(polygons, light, MAX_LIGHT_LEVELS, min)
 }
 
 /// A leaf's area, centroid, sensor point (its point nearest the centroid) and area-weighted normal.
@@ -305,6 +337,85 @@ fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
         .min_by(|a, b| a.distance_squared(centroid).total_cmp(&b.distance_squared(centroid)))
         .unwrap_or(centroid);
     Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1) }
+}
+
+/// A leaf, halved along its two longest axes where `light` says its direct light varies over it, `levels`
+/// times at most.
+fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, levels: u32, min: f32) -> Tree {
+    let whole = leaf(&polygons);
+    let Some(varies) = light.filter(|_| levels > 0 && whole.area >= 4.0 * min) else { return Tree::Leaf(whole) };
+    if !varies(&spread(&polygons), whole.normal) {
+        return Tree::Leaf(whole);
+    }
+    let b = Aabb::of(polygons.iter().flat_map(|(p, _)| p.v[..p.len].iter().copied()));
+    let extent = b.max - b.min;
+    let mut axes = [0, 1, 2];
+    axes.sort_by(|&a, &c| extent[c].total_cmp(&extent[a]));
+    let planes: Vec<Vec4> = axes[..2]
+        .iter()
+        .filter(|&&a| extent[a] > 0.0)
+        .map(|&a| {
+            let mut plane = Vec4::ZERO;
+            plane[a] = 1.0;
+            plane.w = -b.center()[a];
+            plane
+        })
+        .collect();
+    halve(polygons, &planes, light, levels, min)
+}
+
+/// `polygons` split by each of `planes` in turn, then each part [`lit`] one level down.
+fn halve(
+    polygons: Vec<(Polygon, Vec3)>,
+    planes: &[Vec4],
+    light: Option<LightVaries<'_>>,
+    levels: u32,
+    min: f32,
+) -> Tree {
+    let Some((plane, rest)) = planes.split_first() else { return lit(polygons, light, levels - 1, min) };
+    let mut sides: [Vec<(Polygon, Vec3)>; 2] = [Vec::new(), Vec::new()];
+    for (p, n) in &polygons {
+        for (side, part) in p.split(*plane).into_iter().enumerate() {
+            if part.len >= 3 {
+                sides[side].push((part, *n));
+            }
+        }
+    }
+    if sides.iter().any(|s| s.is_empty()) {
+        return halve(polygons, rest, light, levels, min);
+    }
+    let [below, above] = sides;
+    let children = [halve(below, rest, light, levels, min), halve(above, rest, light, levels, min)];
+    Tree::Split { plane: *plane, children: Box::new(children), lit: true }
+}
+
+/// [`SAMPLES_PER_PIECE`] points over `polygons`, stratified by area: point k is at the (k + ½)/K quantile of
+/// the fan triangles' areas, then at an R2 point folded into that triangle (as `sensors::hints` spreads
+/// points over lights). Deterministic.
+fn spread(polygons: &[(Polygon, Vec3)]) -> [Vec3; SAMPLES_PER_PIECE] {
+    let fans: Vec<[Vec3; 3]> = polygons
+        .iter()
+        .flat_map(|(p, _)| (1..p.len.saturating_sub(1)).map(move |i| [p.v[0], p.v[i], p.v[i + 1]]))
+        .collect();
+    let areas: Vec<f32> = fans.iter().map(|t| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()).collect();
+    let total: f32 = areas.iter().sum();
+    let fallback = polygons[0].0.v[0];
+    std::array::from_fn(|k| {
+        if total <= 0.0 || fans.is_empty() {
+            return fallback;
+        }
+        let mut target = (k as f32 + 0.5) / SAMPLES_PER_PIECE as f32 * total;
+        let i = areas.iter().position(|&a| {
+            target -= a;
+            target <= 0.0
+        });
+        let t = &fans[i.unwrap_or(fans.len() - 1)];
+        let (mut u, mut v) = ((0.5 + 0.754_877_7 * k as f32).fract(), (0.5 + 0.569_840_3 * k as f32).fract());
+        if u + v > 1.0 {
+            (u, v) = (1.0 - u, 1.0 - v);
+        }
+        t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v
+    })
 }
 
 /// Whether `to` (on a surface of normal `n_to`) can be seen from `from` (normal `n`) on both sides: the

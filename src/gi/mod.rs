@@ -22,7 +22,7 @@ use glam::{Vec3, Vec4};
 
 use crate::gpu_types::{GpuCacheGrid, GpuCacheSlot, GpuCacheSplit};
 use crate::scene::{Mesh, SurfaceId};
-pub use entries::{Entry, SPLIT, Split};
+pub use entries::{Entry, LightVaries, SPLIT, Split};
 pub use grid::Grid;
 
 /// The highest reflectance the bounces use: at 1 a closed room would reflect its light forever (the series
@@ -49,6 +49,8 @@ pub struct RadianceCache {
     pub slots: Vec<GpuCacheSlot>,
     /// Keys in the table: (cell, surface) pairs, their aliases included.
     pub keys: usize,
+    /// Splits that halve a piece where its direct light varies.
+    pub light_splits: usize,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.
     pub surfaces: u32,
     /// Materials whose `Kd` was clamped for the bounces, by name.
@@ -57,10 +59,11 @@ pub struct RadianceCache {
 
 impl RadianceCache {
     /// The cache of `mesh` with `resolution` cells along its longest side; `lod`: triangles of coarser levels
-    /// of detail the sensor maps may draw instead of the mesh's (see [`entries`]).
-    pub fn build(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], SurfaceId)]) -> Self {
+    /// of detail the sensor maps may draw instead of the mesh's; `light`: where the direct light varies,
+    /// pieces are halved (see [`entries`]).
+    pub fn build(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], SurfaceId)], light: Option<LightVaries<'_>>) -> Self {
         let grid = Grid::new(mesh.bounds, resolution);
-        let pieces = entries::build(&grid, &mesh.triangles, lod);
+        let pieces = entries::build(&grid, &mesh.triangles, lod, light);
         let mut clamped = Vec::new();
         let albedo = pieces
             .entries
@@ -84,6 +87,7 @@ impl RadianceCache {
             albedo,
             slots,
             keys: keys.len(),
+            light_splits: pieces.light_splits,
             surfaces: mesh.surfaces.len() as u32,
             clamped,
         }

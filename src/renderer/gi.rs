@@ -39,6 +39,8 @@ pub struct GiStats {
     pub bounces: u32,
     /// Cache entries (sensors per bounce), keys in its table, and its bytes on the GPU.
     pub entries: u64,
+    /// Pieces halved because their direct light varies over them (`gi::entries::MAX_LIGHT_LEVELS`).
+    pub light_splits: u64,
     pub keys: u64,
     pub cache_bytes: u64,
     /// Cells along the scene's longest side, and their size.
@@ -110,8 +112,7 @@ pub(super) fn solve(
     device: &Arc<Device>,
     runners: Runners<'_>,
     (cache, gpu): (&RadianceCache, &GpuCache),
-    bounces: Bounces,
-    background: Vec3,
+    (bounces, background): (Bounces, Vec3),
     progress: &dyn Progress,
 ) -> Result<GiStats> {
     let start = Instant::now();
@@ -121,8 +122,7 @@ pub(super) fn solve(
     let radiance = Arc::new(map_buffer(device, "radiance cache R", g.size)?);
     runners.first.bind(&radiance)?;
     runners.later.bind(&radiance)?;
-    let tol = std::env::var("GI_TOL").ok().and_then(|t| t.parse().ok()).unwrap_or(crate::gi::solve::DEFAULT_TOLERANCE);
-    let mut solver = Solver::new(bounces, tol, n);
+    let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
     progress.queued(n as u64);
     let mut r = sense(runners.first, &g, CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false }, progress)?;
     let first = start.elapsed().as_secs_f64();
@@ -150,6 +150,7 @@ pub(super) fn solve(
     Ok(GiStats {
         bounces: solver.bounces(),
         entries: n as u64,
+        light_splits: cache.light_splits as u64,
         keys: cache.keys as u64,
         cache_bytes: cache.bytes(),
         resolution: cache.resolution,

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, bail};
 use ash::vk;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 
 use batch::BatchRunner;
@@ -456,13 +456,30 @@ impl Renderer {
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
         let scale = scene.mesh.scale();
         let hierarchy = cluster_hierarchy(device, scene, config.detail);
+        let layout = config.layout(&Lights::new(&scene.mesh));
+        let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
+        // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
+        // cache's pieces are halved.
+        let hints = (layout.groups > 0).then(|| {
+            let lights = Lights::new(&scene.mesh);
+            (Bvh::build(&scene.mesh.triangles), hints::light_points(&lights))
+        });
         let cache = config.cache.map(|c| {
-            RadianceCache::build(&scene.mesh, c.resolution, &hierarchy.as_ref().map(lod_triangles).unwrap_or_default())
+            let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
+            let threshold = crate::gi::entries::LIGHT_VARIATION;
+            let varies = |points: &[Vec3], n: Vec3| {
+                let Some((bvh, lights)) = &hints else { return false };
+                [n, -n].iter().any(|&n| {
+                    let seen = points.iter().map(|&p| hints::mask(bvh, lights, (p, n), bias, near).count_ones());
+                    let (lo, hi) = seen.fold((u32::MAX, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
+                    (hi - lo) as f32 > threshold * lights.len() as f32
+                })
+            };
+            RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies))
         });
         let gpu_scene = GpuScene::upload(device, scene, hierarchy.as_ref(), cache.as_ref())?;
-        let layout = config.layout(&gpu_scene.lights);
         let mut budget = config.batch_budget(device, &layout);
-        let offsets = (frame::BIAS * scale, frame::NEAR * scale);
+        let offsets = (bias, near);
         // The cache's later bounces: its main layers only, no zoom views (their direct light is the first
         // bounce's), at their own rd, in a quarter of the budget (no more than all its entries need).
         let cache = match (cache, config.cache) {
@@ -477,8 +494,6 @@ impl Renderer {
             _ => None,
         };
         let desc = StrategyDesc { layout, fronts: fronts(config.estimator), rd: config.sensor_size, budget };
-        let hints =
-            (layout.groups > 0).then(|| (Bvh::build(&scene.mesh.triangles), hints::light_points(&gpu_scene.lights)));
         Ok(Self {
             hints,
             runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
@@ -556,7 +571,8 @@ impl Renderer {
              paper's ε only",
         )?;
         let runners = gi::Runners { first: &mut self.runner, later };
-        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), bounces, frame.background, progress)?;
+        let stats =
+            gi::solve(&self.device, runners, (cache, &self.scene.cache), (bounces, frame.background), progress)?;
         self.cache_solved = true;
         Ok(Some(stats))
     }

@@ -69,23 +69,28 @@ pub fn hints(bvh: &Bvh, points: &[LightPoint], g: &GBufferData, bias: f32, near:
             if g.surface[i] == NO_SURFACE {
                 return 0;
             }
-            let n = g.normal[i].truncate();
-            let origin = g.position[i].truncate() + n * bias;
-            let mut mask = 0u64;
-            for (k, q) in points.iter().enumerate().take(MAX_POINTS) {
-                let d = q.position - origin;
-                let length = d.length();
-                if d.dot(n) <= 0.0 || q.normal.dot(-d) <= 0.0 || length <= near {
-                    continue;
-                }
-                // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
-                if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
-                    mask |= 1 << k;
-                }
-            }
-            mask
+            mask(bvh, points, (g.position[i].truncate(), g.normal[i].truncate()), bias, near)
         })
         .collect()
+}
+
+/// Bit k set where a sensor on the surface at `p` facing `n` (at `p + n·bias`, seeing from `near` on) sees
+/// point k of `points`: [`hints`] for one point.
+pub fn mask(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, near: f32) -> u64 {
+    let origin = p + n * bias;
+    let mut mask = 0u64;
+    for (k, q) in points.iter().enumerate().take(MAX_POINTS) {
+        let d = q.position - origin;
+        let length = d.length();
+        if d.dot(n) <= 0.0 || q.normal.dot(-d) <= 0.0 || length <= near {
+            continue;
+        }
+        // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
+        if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
+            mask |= 1 << k;
+        }
+    }
+    mask
 }
 
 #[cfg(test)]
