@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the OBJ and MTL of two scenes that are hard for sensor-based lighting at ε = 0 (direct light):
+"""Writes the OBJ and MTL of two scenes that are hard for sensor-based lighting, in direct light (`--bounces 0`)
+and with global illumination:
 
 * scenes/small-light/: a 3 × 4 × 2.5 m room lit by one 0.1 × 0.1 m light hanging at 2 m (1/30 of the
   room's width), radiance 2000: a light that a sensor map of modest resolution resolves as a few texels
@@ -9,7 +10,7 @@
 * scenes/door-ajar/: after Bitterli's "veach ajar": a room lit only through a door left 5° ajar (and
   1 cm clearances above and below it) from a bright area light in the room behind. Direct light enters
   through the narrow gap and falls on the floor and the left wall as a thin wedge; everything else in the
-  room is unlit at ε = 0.
+  room is unlit in direct light, and lit only by what the gap lets through and the room reflects.
 
 Units are metres, y up. Both are closed: every room has all its walls, so every sensor sits inside.
 Every face is wound counter-clockwise seen from its front (into the room for the shells, outwards for

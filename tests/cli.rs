@@ -127,11 +127,57 @@ fn a_tiny_memory_budget_means_more_batches_not_failure() {
     assert!(stats["batches"].as_u64().unwrap() >= stats["sensors"].as_u64().unwrap() / 3);
 }
 
+/// The default render is global illumination, said in its summary; a material reflecting more than the
+/// bounces allow is warned about once, before the work.
+#[test]
+fn global_illumination_is_the_default_and_says_what_it_did() {
+    let dir = common::scratch("render_gi");
+    let (mesh, mtl) = (dir.join("bright.obj"), dir.join("bright.mtl"));
+    std::fs::write(&mtl, "newmtl snow\nKd 1.2 1.2 1.2\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 5 5 5\n").unwrap();
+    let obj = "mtllib bright.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\n\
+               usemtl snow\nf 1 2 3 4\nusemtl lamp\nf 5 8 7 6\n";
+    std::fs::write(&mesh, obj).unwrap();
+    let out = dir.join("bright.exr");
+    let run = common::sensorlight(&[
+        "render",
+        mesh.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ]);
+    let stderr = common::stderr(&run);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("global illumination: "), "{stderr}");
+    assert_eq!(stderr.matches("global illumination's bounces use at most 0.98").count(), 1, "{stderr}");
+    let direct = common::sensorlight(&[
+        "render",
+        mesh.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--bounces",
+        "0",
+    ]);
+    let stderr = common::stderr(&direct);
+    assert!(direct.status.success() && !stderr.contains("global illumination"), "{stderr}");
+}
+
 #[test]
 fn bad_render_parameters_are_clear_errors() {
     let scene = common::project("scenes/cornell/cornell.toml");
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 15] = [
         (&["--width", "0"], "--width"),
+        (&["--bounces", "-1"], "expected a count of bounces (0, 1, 2, …) or 'auto'"),
+        (&["--bounces", "many"], "expected a count of bounces"),
+        (&["--bounces", "2", "--epsilon", "0.1"], "--bounces 2 cannot be combined with --epsilon 0.1"),
+        (&["--cache-resolution", "0"], "--cache-resolution must be 1 to 1022 cells"),
+        (&["--cache-sensor-size", "7"], "--cache-sensor-size"),
         (&["--sensor-size", "0"], "--sensor-size"),
         (&["--fov", "0"], "--fov"),
         (&["--sensor-size", "1000000"], "--sensor-size 1000000 exceeds this device"),

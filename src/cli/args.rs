@@ -43,7 +43,7 @@ pub struct EstimatorFlags {
 pub struct BounceFlags {
     /// Global illumination: indirect bounces, N ≥ 0 (0 = direct light only; N is a path tracer's maximum
     /// depth N + 2), or auto: until converged [default: auto, unless --epsilon is given]
-    #[arg(long, value_name = "N|auto")]
+    #[arg(long, value_name = "N|auto", allow_negative_numbers = true)]
     pub bounces: Option<Bounces>,
 }
 

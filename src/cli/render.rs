@@ -109,6 +109,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     }
     super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &[&args.scene])?;
     let (scene, params) = super::load_input(&args.scene, &args.overrides(), (args.image.width, args.image.height))?;
+    if params.estimator.indirect.bounces().is_some() {
+        super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
+    }
     // Again with the mesh and its materials, known now.
     super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &scene.input_paths())?;
     let size = args.image.size(&scene)?;

@@ -26,9 +26,26 @@ pub use entries::{Entry, LightVaries, SPLIT, Split};
 pub use grid::Grid;
 
 /// The highest reflectance the bounces use: at 1 a closed room would reflect its light forever (the series
-/// diverges). Materials above it are clamped for the cache only, and said so once
-/// ([`RadianceCache::clamped`]).
+/// diverges). Materials above it are clamped for the cache only, and said so once ([`albedo_warnings`]).
 pub const MAX_ALBEDO: f32 = 0.98;
+
+/// What global illumination says of `mesh` before it renders: each material in use that reflects more than
+/// [`MAX_ALBEDO`], once.
+pub fn albedo_warnings(mesh: &Mesh) -> Vec<String> {
+    let mut used: Vec<usize> = mesh.surfaces.iter().map(|s| s.material).collect();
+    used.sort_unstable();
+    used.dedup();
+    (used.into_iter().map(|m| &mesh.materials[m]))
+        .filter(|m| m.kd.max_element() > MAX_ALBEDO)
+        .map(|m| {
+            format!(
+                "material '{}' has Kd {} {} {}: global illumination's bounces use at most {MAX_ALBEDO} per channel \
+                 (at 1 a closed room would reflect its light forever)",
+                m.name, m.kd.x, m.kd.y, m.kd.z
+            )
+        })
+        .collect()
+}
 
 /// How far towards the eye a fragment is moved to be tested against split planes, relative to its distance
 /// (`glsl/cache.glsl` `CACHE_SPLIT_PULL`).
@@ -53,8 +70,6 @@ pub struct RadianceCache {
     pub light_splits: usize,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.
     pub surfaces: u32,
-    /// Materials whose `Kd` was clamped for the bounces, by name.
-    pub clamped: Vec<String>,
 }
 
 impl RadianceCache {
@@ -64,18 +79,8 @@ impl RadianceCache {
     pub fn build(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], SurfaceId)], light: Option<LightVaries<'_>>) -> Self {
         let grid = Grid::new(mesh.bounds, resolution);
         let pieces = entries::build(&grid, &mesh.triangles, lod, light);
-        let mut clamped = Vec::new();
-        let albedo = pieces
-            .entries
-            .iter()
-            .map(|e| {
-                let m = mesh.material_of(e.surface);
-                if m.kd.max_element() > MAX_ALBEDO && !clamped.contains(&m.name) {
-                    clamped.push(m.name.clone());
-                }
-                m.kd.min(Vec3::splat(MAX_ALBEDO))
-            })
-            .collect();
+        let albedo =
+            pieces.entries.iter().map(|e| mesh.material_of(e.surface).kd.min(Vec3::splat(MAX_ALBEDO))).collect();
         let keys: Vec<([u32; 2], u32)> =
             pieces.keys.iter().map(|&((cell, surface), reference)| ([cell, surface], reference)).collect();
         let slots = table(&keys);
@@ -89,7 +94,6 @@ impl RadianceCache {
             keys: keys.len(),
             light_splits: pieces.light_splits,
             surfaces: mesh.surfaces.len() as u32,
-            clamped,
         }
     }
 
