@@ -1,15 +1,22 @@
 #!/usr/bin/env bash
 # The accuracy tables of docs/ACCURACY.md: sensorlight against its CPU oracle (`sensorlight reference`, light
-# sampling + MIS, ε = 0 or as stated), per-pixel relative RMSE of R over lit pixels, silhouettes and emitters
-# masked, the oracle's own noise taken out ("own error"). The peer table compares images (Le + Kd·R). References are made once into OUT and reused.
+# sampling + MIS, ε = 0 or as stated; path tracing for global illumination), per-pixel relative RMSE of R over
+# lit pixels, silhouettes and emitters masked, the oracle's own noise taken out ("own error"). The peer and
+# global-illumination tables compare images (Le + Kd·R). References are made once into OUT and reused.
 #
-#   scripts/accuracy.sh OUT [every|curve|ajar]...      (default: all three tables)
+#   scripts/accuracy.sh OUT [every|curve|ajar|peer|gi|gi-scenes|gi-peer]...   (default: every curve ajar)
 #
 # every: every pixel sensed, rd 64, no filter, ε 0 — the paper's estimator against the exact one.
 # curve: the shipped Cornell box at 256², ε 0.1, defaults but for rd (and dradiance): error against time.
 # ajar:  the door-ajar scene, defaults against every pixel sensed.
 # peer:  against Mitsuba 3's direct light (scripts/peer/mitsuba_direct.py, pixel centres, ε 0) at each
 #        scene's own size: PEER=DIR holding <scene>-ref.exr (made as docs/ACCURACY.md says).
+# gi:    global illumination on the shipped Cornell box at 256²: the defaults, then bounces, cache
+#        resolution, cache sensor size, rd and dradiance each varied, against the path tracer (4 096 samples).
+# gi-scenes: the defaults on the room, the door ajar, the small light and a 10⁶-triangle sphere in the box
+#        (scripts/make_big_scenes.py 1000000), each at a stated size, against the path tracer.
+# gi-peer: Mitsuba 3's path tracer (MITSUBA_PY, scripts/peer/mitsuba_direct.py --integrator path) on the
+#        Cornell box at 256² at several sample counts, against the same oracle: time to equal error.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${SENSORLIGHT:-target/release/sensorlight}
@@ -20,9 +27,10 @@ peer=${PEER:-}
 mkdir -p "$out"
 export SENSORLIGHT_CACHE_DIR="$out/cache"
 
-ref() { # NAME SCENE WIDTH HEIGHT SENSOR SAMPLES EPSILON
+ref() { # NAME SCENE WIDTH HEIGHT SENSOR SAMPLES MODEL (--epsilon E or --bounces N|auto)
+    # shellcheck disable=SC2086 # MODEL is a flag and its value
     [ -f "$out/$1-ref.exr" ] || "$bin" reference "scenes/$2" -o "$out/$1-ref.exr" --width "$3" --height "$4" \
-        --sensor "$5" --samples "$6" --epsilon "$7" --no-png >&2
+        --sensor "$5" --samples "$6" $7 --no-png >&2
 }
 
 row() { # LABEL REFERENCE SCENE RENDER-FLAGS...
@@ -56,7 +64,7 @@ for table in ${tables[*]}; do
         for c in "cornell cornell/cornell.toml 96 96 hemicube" "cornell-frustum cornell/cornell.toml 96 96 frustum" \
             "small-light small-light/small-light.toml 160 120 hemicube" "room room/room.toml 128 96 hemicube"; do
             read -r name scene w h sensor <<<"$c"
-            ref "$name" "$scene" "$w" "$h" "$sensor" 16384 0
+            ref "$name" "$scene" "$w" "$h" "$sensor" 16384 "--epsilon 0"
             for estimator in paper exact; do
                 row "$name-$estimator" "$out/$name-ref.exr" "$scene" --estimator "$estimator" --sensor "$sensor" \
                     --width "$w" --height "$h" "${every[@]}"
@@ -66,7 +74,7 @@ for table in ${tables[*]}; do
     curve)
         echo "### Error against time: the shipped Cornell box, 256², ε 0.1"
         header
-        ref cornell256 cornell/cornell.toml 256 256 hemicube 4096 0.1
+        ref cornell256 cornell/cornell.toml 256 256 hemicube 4096 "--epsilon 0.1"
         r="$out/cornell256-ref.exr"
         for rd in 64 128 256; do row "paper-rd$rd" "$r" cornell/cornell.toml --estimator paper --sensor-size "$rd"; done
         for rd in 16 32 64; do row "exact-rd$rd" "$r" cornell/cornell.toml --estimator exact --sensor-size "$rd"; done
@@ -76,7 +84,7 @@ for table in ${tables[*]}; do
     ajar)
         echo "### Door ajar (160 × 120, ε 0): defaults against every pixel sensed"
         header
-        ref door-ajar door-ajar/door-ajar.toml 160 120 hemicube 16384 0
+        ref door-ajar door-ajar/door-ajar.toml 160 120 hemicube 16384 "--epsilon 0"
         size=(--width 160 --height 120 --epsilon 0)
         row ajar-every "$out/door-ajar-ref.exr" door-ajar/door-ajar.toml "${size[@]}" --tile 1 --dradiance 0 --filter-radius 0
         row ajar-defaults "$out/door-ajar-ref.exr" door-ajar/door-ajar.toml "${size[@]}"
@@ -92,6 +100,56 @@ for table in ${tables[*]}; do
             row "$scene-mitsuba-defaults" "$reference" "$scene/$scene.toml" --epsilon 0
             row "$scene-mitsuba-every-rd64" "$reference" "$scene/$scene.toml" --epsilon 0 --tile 1 --dradiance 0 \
                 --filter-radius 0 --sensor-size 64
+        done
+        ;;
+    gi)
+        echo "### Global illumination: the shipped Cornell box, 256², against the path tracer"
+        header
+        ref cornell256-gi cornell/cornell.toml 256 256 hemicube 4096 "--bounces auto"
+        r="$out/cornell256-gi-ref.exr"
+        layer=""
+        s=cornell/cornell.toml
+        row gi-defaults "$r" $s
+        for b in 1 2 4; do row "gi-bounces$b" "$r" $s --bounces "$b"; done
+        for n in 8 32; do row "gi-cache$n" "$r" $s --cache-resolution "$n"; done
+        for n in 8 32; do row "gi-cache-rd$n" "$r" $s --cache-sensor-size "$n"; done
+        for n in 16 64; do row "gi-rd$n" "$r" $s --sensor-size "$n"; done
+        row gi-d0.1 "$r" $s --dradiance 0.1
+        row gi-every "$r" $s --tile 1 --dradiance 0
+        row paper-eps0.1 "$r" $s --epsilon 0.1
+        row direct "$r" $s --bounces 0
+        ;;
+    gi-scenes)
+        echo "### Global illumination: the defaults on the other scenes, against the path tracer"
+        header
+        layer=""
+        ref room-gi room/room.toml 160 120 hemicube 4096 "--bounces auto"
+        row gi-room "$out/room-gi-ref.exr" room/room.toml --width 160 --height 120
+        ref small-light-gi small-light/small-light.toml 160 120 hemicube 4096 "--bounces auto"
+        row gi-small-light "$out/small-light-gi-ref.exr" small-light/small-light.toml --width 160 --height 120
+        ref door-ajar-gi door-ajar/door-ajar.toml 80 60 hemicube 262144 "--bounces auto"
+        row gi-door-ajar "$out/door-ajar-gi-ref.exr" door-ajar/door-ajar.toml --width 80 --height 60
+        if [ -f scenes/big/sphere-1000000/scene.toml ]; then
+            ref big-gi big/sphere-1000000/scene.toml 64 64 hemicube 4096 "--bounces auto"
+            row gi-big "$out/big-gi-ref.exr" big/sphere-1000000/scene.toml --width 64 --height 64
+        fi
+        ;;
+    gi-peer)
+        echo "### Mitsuba 3's path tracer on the Cornell box, 256², against the same oracle"
+        echo
+        echo "| spp | seconds | own error | relative RMSE |"
+        echo "|---|---|---|---|"
+        ref cornell256-gi cornell/cornell.toml 256 256 hemicube 4096 "--bounces auto"
+        for spp in 256 1024 4096; do
+            m="$out/mitsuba-path-$spp.exr"
+            seconds=$("${MITSUBA_PY:-python3}" scripts/peer/mitsuba_direct.py scenes/cornell/cornell.toml -o "$m" \
+                --integrator path --max-depth -1 --spp "$spp" --pixel-sampling centre | sed -n 's/.*total \([0-9.]*\) s.*/\1/p')
+            "$bin" compare "$m" "$out/cornell256-gi-ref.exr" --json "$m.json" >/dev/null 2>&1
+            python3 - "$spp" "$seconds" "$m.json" <<'PY'
+import json, sys
+spp, seconds, cmp = sys.argv[1], float(sys.argv[2]), json.load(open(sys.argv[3]))
+print(f"| {spp} | {seconds:.1f} | {100 * cmp['own_error']:.2f} % | {100 * cmp['relative_rmse']:.2f} % |")
+PY
         done
         ;;
     *) echo "unknown table '$table'" >&2; exit 2 ;;

@@ -164,6 +164,16 @@ impl RadianceCache {
         if all.is_empty() { vec![GpuCacheSplit::default()] } else { all }
     }
 
+    /// At least how many bytes on the GPU the cache of `mesh` at `resolution` will take, before it is built:
+    /// every triangle's area in cells, and at least one cell per triangle, a pair of entries each.
+    pub fn bytes_at_least(mesh: &Mesh, resolution: u32) -> u64 {
+        let cell = Grid::new(mesh.bounds, resolution).cell as f64;
+        let cells: f64 =
+            mesh.triangles.iter().map(|t| (crate::scene::triangle_area(&t.v) as f64 / (cell * cell)).max(1.0)).sum();
+        // A value per entry, two table slots per key (at most half full).
+        (cells * (2.0 * 16.0 + 2.0 * size_of::<GpuCacheSlot>() as f64) / 2.0) as u64
+    }
+
     /// Bytes on the GPU: the table and the values.
     pub fn bytes(&self) -> u64 {
         (size_of::<GpuCacheGrid>()

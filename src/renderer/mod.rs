@@ -368,6 +368,23 @@ fn check_finite(image: &[Vec4], width: usize, driver: &str) -> Result<()> {
     Ok(())
 }
 
+/// The radiance cache's table and values against the device: at most an eighth of its local memory (as the
+/// batches in flight together), before anything is uploaded.
+fn check_cache_size(device: &Device, bytes: u64, resolution: u32) -> Result<()> {
+    let most = device.adapter.device_local_bytes / 8;
+    if bytes > most || bytes > device.adapter.limits.max_storage_buffer_range as u64 {
+        let problem = format!(
+            "{resolution} gives a radiance cache of at least {:.0} MiB, more than this device allows ({:.0} MiB, an \
+             eighth of its memory, in storage buffers of at most {:.0} MiB); use fewer cells",
+            bytes as f64 / (1 << 20) as f64,
+            most as f64 / (1 << 20) as f64,
+            device.adapter.limits.max_storage_buffer_range as f64 / (1 << 20) as f64
+        );
+        return Err(ParamError::new(Param::CacheResolution, problem).into());
+    }
+    Ok(())
+}
+
 /// The sensor size against the device's largest image and framebuffer side.
 fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
     let limits = &device.adapter.limits;
@@ -464,6 +481,9 @@ impl Renderer {
             let lights = Lights::new(&scene.mesh);
             (Bvh::build(&scene.mesh.triangles), hints::light_points(&lights))
         });
+        if let Some(c) = config.cache {
+            check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;
+        }
         let cache = config.cache.map(|c| {
             let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
             let threshold = crate::gi::entries::LIGHT_VARIATION;
@@ -477,6 +497,9 @@ impl Renderer {
             };
             RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies))
         });
+        if let (Some(c), Some(config)) = (&cache, config.cache) {
+            check_cache_size(device, c.bytes(), config.resolution)?;
+        }
         let gpu_scene = GpuScene::upload(device, scene, hierarchy.as_ref(), cache.as_ref())?;
         let mut budget = config.batch_budget(device, &layout);
         let offsets = (bias, near);
