@@ -68,7 +68,13 @@ impl GpuCache {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             table: Arc::new(transfer::upload(device, "radiance cache table", &table, storage)?),
-            values: Arc::new(transfer::upload(device, "radiance cache values", &vec![Vec4::ZERO; values], storage)?),
+            // Read back by `Renderer::cache_values`.
+            values: Arc::new(transfer::upload(
+                device,
+                "radiance cache values",
+                &vec![Vec4::ZERO; values],
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+            )?),
             splits: Arc::new(transfer::upload(device, "radiance cache splits", &splits, storage)?),
         })
     }

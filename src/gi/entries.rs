@@ -88,6 +88,9 @@ pub struct Pieces {
     pub entries: Vec<Entry>,
     /// Of the splits, those that halve a piece where its direct light varies.
     pub light_splits: usize,
+    /// Entry pairs whose direct light is the mean over points spread over their piece (it varies over it
+    /// and it can be halved no more), with those points.
+    pub spread: Vec<(u32, [Vec3; SAMPLES_PER_PIECE])>,
 }
 
 /// The packed cell of a key's first word.
@@ -121,6 +124,9 @@ struct Leaf {
     centroid: Vec3,
     point: Vec3,
     normal: Vec3,
+    /// Where the direct light still varies over it when it can be halved no more: points spread over it,
+    /// whose mean is its direct light.
+    spread: Option<[Vec3; SAMPLES_PER_PIECE]>,
 }
 
 /// Every cell of `grid` within the margin of triangle `v`, with the triangle's piece of it.
@@ -187,8 +193,13 @@ pub fn build(
 
     // Number the entries and splits; note which unsplit pieces are small enough to alias a neighbour.
     let bvh = Bvh::build(triangles);
-    let mut pieces =
-        Pieces { keys: Vec::with_capacity(runs.len()), splits: Vec::new(), entries: Vec::new(), light_splits: 0 };
+    let mut pieces = Pieces {
+        keys: Vec::with_capacity(runs.len()),
+        splits: Vec::new(),
+        entries: Vec::new(),
+        light_splits: 0,
+        spread: Vec::new(),
+    };
     let mut own: HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)> = HashMap::new();
     let mut small = Vec::new();
     let mut references = vec![u32::MAX; runs.len()];
@@ -252,6 +263,9 @@ impl Pieces {
                 let (point, area) = (l.point, l.area);
                 self.entries.push(Entry { point, normal: -l.normal, surface, front: false, area });
                 self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
+                if let Some(points) = l.spread {
+                    self.spread.push((pair, points));
+                }
                 pair
             }
             Tree::Split { plane, children, lit } => {
@@ -336,15 +350,20 @@ fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
         .map(|(p, _)| p.closest(centroid))
         .min_by(|a, b| a.distance_squared(centroid).total_cmp(&b.distance_squared(centroid)))
         .unwrap_or(centroid);
-    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1) }
+    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1), spread: None }
 }
 
 /// A leaf, halved along its two longest axes where `light` says its direct light varies over it, `levels`
 /// times at most.
 fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, levels: u32, min: f32) -> Tree {
-    let whole = leaf(&polygons);
-    let Some(varies) = light.filter(|_| levels > 0 && whole.area >= 4.0 * min) else { return Tree::Leaf(whole) };
-    if !varies(&spread(&polygons), whole.normal) {
+    let mut whole = leaf(&polygons);
+    let Some(varies) = light else { return Tree::Leaf(whole) };
+    let points = spread(&polygons);
+    if !varies(&points, whole.normal) {
+        return Tree::Leaf(whole);
+    }
+    if levels == 0 || whole.area < 4.0 * min {
+        whole.spread = Some(points);
         return Tree::Leaf(whole);
     }
     let b = Aabb::of(polygons.iter().flat_map(|(p, _)| p.v[..p.len].iter().copied()));

@@ -68,6 +68,9 @@ pub struct RadianceCache {
     pub keys: usize,
     /// Splits that halve a piece where its direct light varies.
     pub light_splits: usize,
+    /// Entry pairs whose direct light is the mean over points spread over their piece, and those points
+    /// (see [`entries`]).
+    pub spread: Vec<(u32, [Vec3; entries::SAMPLES_PER_PIECE])>,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.
     pub surfaces: u32,
 }
@@ -93,6 +96,7 @@ impl RadianceCache {
             slots,
             keys: keys.len(),
             light_splits: pieces.light_splits,
+            spread: pieces.spread,
             surfaces: mesh.surfaces.len() as u32,
         }
     }

@@ -5,12 +5,18 @@
 //! once and `T` the transport between entries as the sensors rasterise it (non-negative, the same at every
 //! bounce: the sensors are the same). Each bounce adds `Δ_k = T^{k−1} d`, which soon shrinks by a fixed
 //! ratio λ, `T`'s dominant eigenvalue (the scene's effective albedo): in a closed box of albedo ρ it is ρ
-//! from the first bounce. So the rest of the series is a geometric tail, `Δ_k · λ/(1 − λ)`, added to every
+//! from the first bounce. So the rest of the series is a geometric tail, `Δ_k · λ/(1 − λ)`, added to each
 //! entry ([`Solver::values`]): a room of albedo 0.9 needs a few bounces, not the 40 that would leave 1 %.
 //!
-//! With `Bounces::Converged` the solver stops when that extrapolated estimate changes between two bounces
-//! by less than the tolerance (relative, luminance weighted by area); with `Bounces::Fixed(n)` after exactly
-//! n bounces, unextrapolated (the oracle's `--bounces n` is the same sum).
+//! λ is each entry's own: in two rooms joined by a door ajar, the lit room's light settles at its own ratio
+//! while the other's, arriving through the gap, settles more slowly; one ratio for all, the lit room's,
+//! left the dark room 2.7 % too dark (docs/ACCURACY.md). An entry's ratio is the mean over the last
+//! [`RATIO_SPAN`] bounces of what it added; where it added nothing, there is no tail.
+//!
+//! With `Bounces::Converged` the solver stops when that extrapolated estimate changes between two bounces by
+//! less than the tolerance: the area-weighted mean of each entry's relative change (so a dim room counts as
+//! much as a bright one); with `Bounces::Fixed(n)` after exactly n bounces, unextrapolated (the oracle's
+//! `--bounces n` is the same sum).
 
 use glam::Vec3;
 
@@ -39,8 +45,10 @@ pub struct Solver {
     current: Vec<Vec3>,
     added: Vec<Vec3>,
     /// What each bounce added and what the cache then held, in luminance × area: their ratio is the
-    /// bounce's relative change; two bounces' additions give λ.
+    /// bounce's relative change, and two bounces' additions the scene's λ (for the statistics).
     changes: Vec<(f64, f64)>,
+    /// Each entry's addition (luminance) at the last [`RATIO_SPAN`] + 1 bounces, oldest first: its own λ.
+    history: std::collections::VecDeque<Vec<f32>>,
     /// The extrapolated estimate after the previous bounce (for `auto`'s stopping rule).
     previous_estimate: Option<Vec<Vec3>>,
     /// How much the extrapolated estimate moved at the last bounce, relative.
@@ -63,6 +71,7 @@ impl Solver {
             current: vec![Vec3::ZERO; entries],
             added: vec![Vec3::ZERO; entries],
             changes: Vec::new(),
+            history: std::collections::VecDeque::new(),
             previous_estimate: None,
             last_change: None,
         }
@@ -85,6 +94,10 @@ impl Solver {
             total += (v.dot(LUMINANCE) * e.area) as f64;
         }
         self.changes.push((moved, total));
+        if self.history.len() > RATIO_SPAN {
+            self.history.pop_front();
+        }
+        self.history.push_back(self.added.iter().map(|d| d.dot(LUMINANCE)).collect());
         let k = self.bounces();
         match self.bounces {
             Bounces::Fixed(n) => {
@@ -95,12 +108,7 @@ impl Solver {
             Bounces::Converged => {
                 let estimate = self.values();
                 if let Some(previous) = &self.previous_estimate {
-                    let (mut moved, mut total) = (0.0f64, 0.0f64);
-                    for ((e, a), b) in entries.iter().zip(&estimate).zip(previous) {
-                        moved += ((*a - *b).abs().dot(LUMINANCE) * e.area) as f64;
-                        total += (a.dot(LUMINANCE) * e.area) as f64;
-                    }
-                    self.last_change = Some(if total > 0.0 { moved / total } else { 0.0 });
+                    self.last_change = Some(relative_change(entries, &estimate, previous));
                 }
                 self.previous_estimate = Some(estimate);
                 let settled = self.last_change.is_some_and(|c| c < self.tolerance) && k >= MIN_EXTRAPOLATED;
@@ -135,24 +143,56 @@ impl Solver {
         Some((last / first).powf(1.0 / span as f64).clamp(0.0, MAX_ALBEDO as f64))
     }
 
-    /// The cache to gather from: after the last bounce, with `auto` the geometric tail added.
-    pub fn values(&self) -> Vec<Vec3> {
-        match self.ratio() {
-            Some(lambda) => {
-                let tail = (lambda / (1.0 - lambda)) as f32;
-                self.current.iter().zip(&self.added).map(|(v, d)| *v + d.max(Vec3::ZERO) * tail).collect()
-            }
-            None => self.current.clone(),
+    /// Entry `i`'s λ: the mean ratio of its additions over the bounces [`Solver::ratio`] uses (0 where it
+    /// added nothing then).
+    fn entry_ratio(&self, i: usize) -> f32 {
+        let k = self.history.len();
+        let span = (self.changes.len() - 2).min(RATIO_SPAN).min(k - 1);
+        let (first, last) = (self.history[k - 1 - span][i], self.history[k - 1][i]);
+        if first <= 0.0 || last <= 0.0 {
+            return 0.0;
         }
+        (last / first).powf(1.0 / span as f32).clamp(0.0, MAX_ALBEDO)
     }
 
-    /// The share of the cache's light the tail adds (0 without extrapolation).
+    /// The cache to gather from: after the last bounce, with `auto` each entry's geometric tail added.
+    pub fn values(&self) -> Vec<Vec3> {
+        if self.ratio().is_none() {
+            return self.current.clone();
+        }
+        (self.current.iter().zip(&self.added).enumerate())
+            .map(|(i, (v, d))| {
+                let lambda = self.entry_ratio(i);
+                *v + d.max(Vec3::ZERO) * (lambda / (1.0 - lambda))
+            })
+            .collect()
+    }
+
+    /// The share of the cache's light the tail adds (0 without extrapolation), at the scene's λ.
     pub fn tail_share(&self) -> f64 {
         let Some(lambda) = self.ratio() else { return 0.0 };
         let (added, total) = self.changes[self.changes.len() - 1];
         let tail = added * lambda / (1.0 - lambda);
         if total + tail > 0.0 { tail / (total + tail) } else { 0.0 }
     }
+}
+
+/// The area-weighted mean relative change of each entry's luminance from `before` to `after`, an entry's
+/// change relative to its luminance, at least a hundredth of the cache's mean (so that the darkest entries,
+/// whose relative change is noise, do not decide).
+fn relative_change(entries: &[Entry], after: &[Vec3], before: &[Vec3]) -> f64 {
+    let area: f64 = entries.iter().map(|e| e.area as f64).sum();
+    if area <= 0.0 {
+        return 0.0;
+    }
+    let mean = entries.iter().zip(after).map(|(e, v)| (v.dot(LUMINANCE) * e.area) as f64).sum::<f64>() / area;
+    let floor = (1e-2 * mean).max(f64::MIN_POSITIVE);
+    let weighted: f64 = (entries.iter().zip(after).zip(before))
+        .map(|((e, a), b)| {
+            e.area as f64 * ((*a - *b).dot(LUMINANCE).abs() as f64 / (a.dot(LUMINANCE) as f64).max(floor))
+        })
+        .sum();
+    weighted / area
 }
 
 #[cfg(test)]
@@ -190,6 +230,29 @@ mod tests {
         assert!(steps <= 4, "{steps} bounces for ρ = 0.9");
         assert!((s.ratio().unwrap() - rho as f64).abs() < 1e-5);
         assert!(s.tail_share() > 0.5, "most of ρ = 0.9's light is in the tail: {}", s.tail_share());
+    }
+
+    /// Two groups of entries whose additions shrink at their own ratios (a room lit through a door ajar
+    /// beside the lit room): each gets its own tail; one ratio for all would leave the slow group short.
+    #[test]
+    fn each_entry_extrapolates_at_its_own_ratio() {
+        let n = 4;
+        let (es, kd) = (entries(n), vec![Vec3::ONE; n]);
+        let ratios = [0.5f32, 0.5, 0.8, 0.8];
+        let mut s = Solver::new(Bounces::Converged, 1e-6, n);
+        // R_k at entry i: the partial sum of a geometric series of ratio ratios[i], first term 1.
+        let mut k = 0;
+        loop {
+            k += 1;
+            let r: Vec<Vec3> = ratios.iter().map(|&q| Vec3::splat((1.0 - q.powi(k)) / (1.0 - q))).collect();
+            if s.step(&es, &kd, &r) == Next::Done {
+                break;
+            }
+        }
+        for (v, q) in s.values().iter().zip(ratios) {
+            let exact = 1.0 / (1.0 - q);
+            assert!(((v.x - exact) / exact).abs() < 1e-3, "ratio {q}: {} against {exact} after {k} bounces", v.x);
+        }
     }
 
     #[test]

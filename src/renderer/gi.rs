@@ -39,8 +39,10 @@ pub struct GiStats {
     pub bounces: u32,
     /// Cache entries (sensors per bounce), keys in its table, and its bytes on the GPU.
     pub entries: u64,
-    /// Pieces halved because their direct light varies over them (`gi::entries::MAX_LIGHT_LEVELS`).
+    /// Pieces halved because their direct light varies over them (`gi::entries::MAX_LIGHT_LEVELS`), and the
+    /// entry pairs whose direct light is still measured at points spread over them.
     pub light_splits: u64,
+    pub spread_pairs: u64,
     pub keys: u64,
     pub cache_bytes: u64,
     /// Cells along the scene's longest side, and their size.
@@ -59,23 +61,36 @@ pub struct GiStats {
     pub seconds: (f64, f64),
 }
 
-/// The cache entries as a one-row G-buffer: the batch runner places a sensor at each entry's point, facing
-/// its side.
-fn entries_as_gbuffer(cache: &RadianceCache) -> GBufferData {
-    let n = cache.entries.len();
+/// Points on the cache's pieces as a one-row G-buffer: the batch runner places a sensor at each
+/// `(point, entry)`, facing that entry's side.
+fn points_as_gbuffer(cache: &RadianceCache, points: &[(Vec3, usize)]) -> GBufferData {
+    let n = points.len();
     let (mut position, mut normal) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    for e in &cache.entries {
-        position.push(e.point.extend(1.0));
+    for &(p, i) in points {
+        let e = &cache.entries[i];
+        position.push(p.extend(1.0));
         normal.push(e.normal.extend(e.front as u32 as f32));
     }
     GBufferData {
         size: ImageSize { width: n as u32, height: 1 },
         position,
         normal,
-        albedo: cache.albedo.iter().map(|a| a.extend(1.0)).collect(),
+        albedo: points.iter().map(|&(_, i)| cache.albedo[i].extend(1.0)).collect(),
         emission: vec![Vec4::ZERO; n],
-        surface: cache.entries.iter().map(|e| e.surface).collect(),
+        surface: points.iter().map(|&(_, i)| cache.entries[i].surface).collect(),
     }
+}
+
+/// The first bounce's sensors: every entry's point, then the points spread over each piece whose direct
+/// light varies over it (both sides), whose mean is that entry's direct light.
+fn first_points(cache: &RadianceCache) -> Vec<(Vec3, usize)> {
+    let mut points: Vec<(Vec3, usize)> = cache.entries.iter().enumerate().map(|(i, e)| (e.point, i)).collect();
+    for (pair, spread) in &cache.spread {
+        for entry in [2 * *pair as usize, 2 * *pair as usize + 1] {
+            points.extend(spread.iter().map(|&p| (p, entry)));
+        }
+    }
+    points
 }
 
 /// The runners the bounces sense with: the render's own for the first (direct light, through the exact
@@ -118,14 +133,23 @@ pub(super) fn solve(
     let start = Instant::now();
     progress.phase(Phase::Bounces);
     let n = cache.entries.len();
-    let g = entries_as_gbuffer(cache);
-    let radiance = Arc::new(map_buffer(device, "radiance cache R", g.size)?);
+    let first = first_points(cache);
+    let (g, first_g) = (points_as_gbuffer(cache, &first[..n]), points_as_gbuffer(cache, &first));
+    // The reductions write R at each sensor's pixel: the first pass has the most.
+    let radiance = Arc::new(map_buffer(device, "radiance cache R", first_g.size)?);
     runners.first.bind(&radiance)?;
     runners.later.bind(&radiance)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
-    progress.queued(n as u64);
-    let mut r = sense(runners.first, &g, CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false }, progress)?;
-    let first = start.elapsed().as_secs_f64();
+    progress.queued(first.len() as u64);
+    let direct = CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false };
+    let sensed = sense(runners.first, &first_g, direct, progress)?;
+    let mut r = sensed[..n].to_vec();
+    let mut spread = vec![(Vec3::ZERO, 0u32); n];
+    for (&(_, i), s) in first[n..].iter().zip(&sensed[n..]) {
+        spread[i] = (spread[i].0 + *s, spread[i].1 + 1);
+    }
+    r.iter_mut().zip(spread).filter(|(_, (_, count))| *count > 0).for_each(|(r, (sum, count))| *r = sum / count as f32);
+    let first_seconds = start.elapsed().as_secs_f64();
     if background != Vec3::ZERO {
         let sky = sense(runners.later, &g, CkParams { epsilon: 0.0, background, cache: false }, progress)?;
         r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
@@ -151,6 +175,7 @@ pub(super) fn solve(
         bounces: solver.bounces(),
         entries: n as u64,
         light_splits: cache.light_splits as u64,
+        spread_pairs: cache.spread.len() as u64,
         keys: cache.keys as u64,
         cache_bytes: cache.bytes(),
         resolution: cache.resolution,
@@ -159,6 +184,6 @@ pub(super) fn solve(
         last_change: solver.last_change,
         ratio: solver.ratio(),
         tail_share: solver.tail_share(),
-        seconds: (first, start.elapsed().as_secs_f64() - first),
+        seconds: (first_seconds, start.elapsed().as_secs_f64() - first_seconds),
     })
 }

@@ -600,6 +600,18 @@ impl Renderer {
         Ok(Some(stats))
     }
 
+    /// The radiance cache's points and table, with global illumination.
+    pub fn cache(&self) -> Option<&RadianceCache> {
+        self.cache.as_ref().map(|(c, _)| c)
+    }
+
+    /// The radiance cache's values as the sensor maps read them (reflected radiance per entry, then the
+    /// surface sides' fallbacks), after [`Renderer::solve_cache`]: for comparing the cache with the oracle.
+    pub fn cache_values(&self) -> Result<Vec<Vec4>> {
+        let cache = self.cache().context("this renderer has no radiance cache")?;
+        transfer::read_buffer(&self.device, &self.scene.cache.values, cache.values_len())
+    }
+
     /// What the sensor maps see on surfaces for `frame`: its ε, or the radiance cache once solved.
     fn ck(&self, frame: &FrameParams) -> CkParams {
         let cache = self.cache_solved && frame.indirect.bounces().is_some();
