@@ -1,5 +1,7 @@
 #version 460
-// Composition (docs/DESIGN.md §3 step 7): final = Le + albedo * R.
+// Composition (docs/DESIGN.md §3 step 7): final = Le + albedo * R, where R is the filtered radiance map and,
+// where the indirect part is filtered apart (push.radius != 0), R = R_f - I_f + I_i (R and its indirect part
+// at R's filter radius, the indirect part at its own). R is written too: the radiance AOV.
 #include "types.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -8,6 +10,9 @@ layout(std430, set = 0, binding = 0) readonly buffer Radiance { vec4 radiance[];
 layout(std430, set = 0, binding = 1) writeonly buffer Final { vec4 final_image[]; };
 layout(set = 0, binding = 2, rgba32f) uniform readonly image2D albedo;
 layout(set = 0, binding = 3, rgba32f) uniform readonly image2D emission;
+layout(std430, set = 0, binding = 4) readonly buffer IndirectAtR { vec4 indirect_at_r[]; };
+layout(std430, set = 0, binding = 5) readonly buffer IndirectOwn { vec4 indirect_own[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer Composed { vec4 composed[]; };
 layout(push_constant) uniform Push { ImagePush push; };
 
 void main() {
@@ -18,5 +23,11 @@ void main() {
     uint i = uint(p.y) * push.width + uint(p.x);
     vec3 le = imageLoad(emission, p).rgb;
     vec3 kd = imageLoad(albedo, p).rgb;
-    final_image[i] = vec4(le + kd * radiance[i].rgb, 1.0);
+    vec3 r = radiance[i].rgb;
+    if (push.radius != 0u) {
+        // Rounding must not turn a black pixel negative.
+        r = max(r - indirect_at_r[i].rgb + indirect_own[i].rgb, vec3(0.0));
+    }
+    composed[i] = vec4(r, radiance[i].w);
+    final_image[i] = vec4(le + kd * r, 1.0);
 }

@@ -1,7 +1,9 @@
 #version 460
 // Reduction (docs/DESIGN.md §3 step 4): one workgroup per sensor reduces its layers to R and writes it
 // into the radiance map at the sensor's pixel (w = STATE_SENSED) and into the batch's results, which the
-// host reads back: a refinement round reads exactly what it sensed.
+// host reads back: a refinement round reads exactly what it sensed. The main layers' share of R (with the
+// exact estimator: all but the emitters' closed-form light, so the light surfaces reflect and the
+// background) goes into the indirect map too, which the post passes filter apart (docs/DESIGN.md §3).
 //
 //   paper's estimator:  R = (1/pi) * sum(Ck * w) over the main layers, w the exact projected solid angle
 //                       of each texel (src/sensors/weights.rs);
@@ -34,6 +36,7 @@ layout(std430, set = 0, binding = 5) readonly buffer Sensors { GpuSensor sensors
 layout(std430, set = 0, binding = 6) readonly buffer Zooms { GpuZoom zooms[]; };  // [sensor][group]
 layout(std430, set = 0, binding = 7) readonly buffer Irradiance { vec4 irradiance[]; };  // [sensor][chunk]
 layout(std430, set = 0, binding = 8) readonly buffer Groups { GpuLightGroup groups[]; };
+layout(std430, set = 0, binding = 9) writeonly buffer Indirect { vec4 indirect[]; };  // the main layers' R
 layout(push_constant) uniform Push { ReducePush push; };
 
 shared vec3 partial[64];
@@ -140,6 +143,7 @@ void main() {
     if (lid == 0u) {
         vec4 value = vec4(r / PI, STATE_SENSED);
         radiance[pixels[sensor]] = value;
+        indirect[pixels[sensor]] = vec4(partial[0] / PI, STATE_SENSED);
         results[sensor].r = value;
         for (uint g = 0u; g < MAX_GROUPS; g++) {
             results[sensor].visibility[g] = seen[g];

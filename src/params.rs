@@ -28,6 +28,9 @@ pub const DEFAULT_SENSOR_SIZE: EstimatorDefault<u32> = EstimatorDefault { exact:
 /// short and pixels were left without even their own sample: NaN.)
 pub const MAX_FILTER_RADIUS: u32 = 64;
 pub const DEFAULT_FILTER_RADIUS: EstimatorDefault<u32> = EstimatorDefault { exact: 0, paper: 2 };
+/// The indirect part's own filter radius with global illumination (docs/ACCURACY.md: the door ajar's
+/// per-pixel error against the path tracer, the Cornell box's unchanged).
+pub const DEFAULT_INDIRECT_FILTER_RADIUS: u32 = 1;
 
 /// A default that depends on the estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -197,6 +200,7 @@ pub enum Param {
     Tile,
     Dradiance,
     FilterRadius,
+    IndirectFilterRadius,
     CacheResolution,
     CacheSensorSize,
     Exposure,
@@ -217,6 +221,7 @@ impl Param {
             Self::Tile => "--tile",
             Self::Dradiance => "--dradiance",
             Self::FilterRadius => "--filter-radius",
+            Self::IndirectFilterRadius => "--indirect-filter-radius",
             Self::CacheResolution => "--cache-resolution",
             Self::CacheSensorSize => "--cache-sensor-size",
             Self::Exposure => "--exposure",
@@ -245,6 +250,7 @@ impl Param {
             Self::Tile => "tile",
             Self::Dradiance => "dradiance",
             Self::FilterRadius => "filter_radius",
+            Self::IndirectFilterRadius => "indirect_filter_radius",
             Self::CacheResolution => "cache_resolution",
             Self::CacheSensorSize => "cache_sensor_size",
             Self::Exposure => "exposure",
@@ -301,6 +307,7 @@ pub struct Overrides {
     pub tile: Option<u32>,
     pub dradiance: Option<f32>,
     pub filter_radius: Option<u32>,
+    pub indirect_filter_radius: Option<u32>,
     pub cache_resolution: Option<u32>,
     pub cache_sensor_size: Option<u32>,
     pub exposure: Option<f32>,
@@ -360,15 +367,19 @@ impl Overrides {
         {
             return fail(Param::Dradiance, format!("must be a finite number ≥ 0, got {d}"));
         }
-        if let Some(r) = self.filter_radius
-            && r > MAX_FILTER_RADIUS
+        for (param, radius) in
+            [(Param::FilterRadius, self.filter_radius), (Param::IndirectFilterRadius, self.indirect_filter_radius)]
         {
-            return fail(
-                Param::FilterRadius,
-                format!(
-                    "must be at most {MAX_FILTER_RADIUS} pixels (σ = radius / 2; the cost grows with radius²), got {r}"
-                ),
-            );
+            if let Some(r) = radius
+                && r > MAX_FILTER_RADIUS
+            {
+                return fail(
+                    param,
+                    format!(
+                        "must be at most {MAX_FILTER_RADIUS} pixels (σ = radius / 2; the cost grows with radius²), got {r}"
+                    ),
+                );
+            }
         }
         if let Some(n) = self.cache_resolution
             && !(1..=MAX_CACHE_RESOLUTION).contains(&n)
@@ -413,13 +424,18 @@ pub struct FrameParams {
     /// keeps to the centre pixel's surface and light mask; the exact estimator leaves it little noise to
     /// remove, so it is off by default there.
     pub filter_radius: u32,
+    /// With global illumination and the exact estimator: the same filter's radius for R's indirect part
+    /// alone (the light the maps see on surfaces), 0 … [`MAX_FILTER_RADIUS`]. The direct light keeps its
+    /// sharp shadows; the indirect, smooth but aliased where it comes through a gap a texel wide (a door
+    /// ajar), loses its pixel-to-pixel noise. Its own radius where it differs from `filter_radius`.
+    pub indirect_filter_radius: u32,
 }
 
 impl FrameParams {
     /// Every pixel sensed and nothing filtered: R exactly as the sensors give it (probes, benchmarks,
     /// comparisons with the oracle).
     pub const fn every_pixel(indirect: Indirect, background: Vec3) -> Self {
-        Self { indirect, background, tile: 1, dradiance: 0.0, filter_radius: 0 }
+        Self { indirect, background, tile: 1, dradiance: 0.0, filter_radius: 0, indirect_filter_radius: 0 }
     }
 }
 
@@ -436,6 +452,7 @@ pub struct RenderParams {
     pub tile: u32,
     pub dradiance: f32,
     pub filter_radius: u32,
+    pub indirect_filter_radius: u32,
     /// Global illumination: the radiance cache's cells along the scene's longest side, 1 to
     /// [`MAX_CACHE_RESOLUTION`]; 8–32 typical. The cache's sensors (about 2 per cell of surface, so 4× for
     /// twice the resolution) are sensed once per bounce; the camera's sensors gather it, so it may be
@@ -503,6 +520,8 @@ impl RenderParams {
         let dradiance = resolve!(dradiance, Param::Dradiance, DEFAULT_DRADIANCE);
         let filter_radius =
             resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS.for_estimator(estimator_kind));
+        let indirect_filter_radius =
+            resolve!(indirect_filter_radius, Param::IndirectFilterRadius, DEFAULT_INDIRECT_FILTER_RADIUS);
         let cache_resolution = resolve!(cache_resolution, Param::CacheResolution, DEFAULT_CACHE_RESOLUTION);
         let cache_sensor_size = resolve!(cache_sensor_size, Param::CacheSensorSize, DEFAULT_CACHE_SENSOR_SIZE);
         let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
@@ -514,6 +533,7 @@ impl RenderParams {
             tile,
             dradiance,
             filter_radius,
+            indirect_filter_radius,
             cache_resolution,
             cache_sensor_size,
             exposure,
@@ -536,6 +556,7 @@ impl RenderParams {
             tile: self.tile,
             dradiance: self.dradiance,
             filter_radius: self.filter_radius,
+            indirect_filter_radius: self.indirect_filter_radius,
         }
     }
 

@@ -140,3 +140,38 @@ fn the_maps_draw_the_triangles_the_cpu_twin_selects() {
         assert_eq!(drawn, expected, "{kind}: triangles drawn by the maps against the CPU twin's selection");
     }
 }
+
+/// Global illumination on a mesh drawn from its clusters: the radiance cache keys the levels of detail's
+/// triangles too (`gi::entries`), so the ball at whatever level a sensor draws it reads its own entries.
+/// The defaults (every pixel sensed here) within 3 % of the path tracer, whose noise is taken out.
+#[test]
+fn global_illumination_on_a_culled_mesh_is_within_three_percent_of_the_path_tracer() {
+    use sensorlight::params::{Bounces, EstimatorParams, FrameParams, Indirect};
+    use sensorlight::reference::integrator::Integrator;
+    let scene = ball_in_a_box((40, 40));
+    let indirect = Indirect::Bounces(Bounces::Converged);
+    let frame = FrameParams::every_pixel(indirect, Vec3::ZERO);
+    let out = common::gpu(|device| {
+        let mut r = Renderer::builder(device, &scene, SensorKind::Hemicube, RD)
+            .detail(Detail::Clusters)
+            .radiance_cache(Some(sensorlight::renderer::CacheConfig { resolution: 16, sensor_size: 16 }))
+            .build_unchecked(StrategyKind::Layered)
+            .unwrap();
+        assert!(r.culled());
+        r.render(scene.image, &frame, &Quiet).unwrap()
+    });
+    let params = EstimatorParams { sensor: SensorKind::Hemicube, indirect, background: Vec3::ZERO };
+    let oracle = Integrator::new(&scene, params, 2048, 3).unwrap().render(scene.image, &|_| ());
+    let size = scene.image;
+    let image = picture("culled GI", size, &out.image, &out.gbuffer.surface);
+    let mut reference = picture("oracle", size, &oracle.image, &out.gbuffer.surface);
+    reference.std_error = Some(oracle.image_std_error().iter().map(|p| [p.x, p.y, p.z]).collect());
+    let a = agreement(&image, &reference).unwrap();
+    eprintln!(
+        "culled GI: own error {:.4}, oracle noise {:.4}, bias {:+.4}",
+        a.own_error.unwrap(),
+        a.reference_noise.unwrap(),
+        a.relative_bias
+    );
+    assert!(a.own_error.unwrap() <= 0.03 && a.relative_bias.abs() <= 0.015, "{a:?}");
+}

@@ -52,6 +52,7 @@ fn progress_sees_every_phase_round_and_snapshot() {
         tile: 8,
         dradiance: 0.2,
         filter_radius: 0,
+        indirect_filter_radius: 0,
     };
     let recorder = Recorder::default();
     let output = common::gpu(|device| {

@@ -160,15 +160,19 @@ fn gpu_interpolation_matches_the_cpu_twin() {
     let (sensed, quads) = refine(&g, 8, 1e30, |_, _| 1.0);
     let initial: Vec<Vec4> =
         (0..w * h).map(|i| if sensed[i as usize] { value(i % w, i / w).extend(SENSED) } else { Vec4::ZERO }).collect();
-    let mut expected = initial.clone();
+    // The indirect map: other values, interpolated over the same quads.
+    let other: Vec<Vec4> = initial.iter().map(|v| Vec4::new(v.z * 0.5, v.y * 0.25, v.x, v.w)).collect();
+    let (mut expected, mut expected_other) = (initial.clone(), other.clone());
     interpolate_cpu(&mut expected, w, &quads);
+    interpolate_cpu(&mut expected_other, w, &quads);
     assert!(expected.iter().any(|r| r.w == INTERPOLATED));
     let size = ImageSize { width: w, height: h };
     let got = common::gpu(|device| {
         let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
         let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
+        let indirect = transfer::upload(device, "indirect", &other, usage).unwrap();
         let mut pass = InterpolatePass::new(device).unwrap();
-        pass.bind(device, &quads, &radiance).unwrap();
+        pass.bind(device, &quads, [&radiance, &indirect]).unwrap();
         device
             .submit_and_wait(|enc| {
                 barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
@@ -176,11 +180,14 @@ fn gpu_interpolation_matches_the_cpu_twin() {
                 Ok(())
             })
             .unwrap();
-        transfer::read_buffer::<Vec4>(device, &radiance, (w * h) as usize).unwrap()
+        let read = |b| transfer::read_buffer::<Vec4>(device, b, (w * h) as usize).unwrap();
+        [read(&radiance), read(&indirect)]
     });
-    for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
-        assert_eq!(a.w, b.w, "state of pixel {i}");
-        assert!((*a - *b).abs().max_element() <= 1e-6, "pixel {i}: GPU {a}, CPU {b}");
+    for (got, expected) in got.iter().zip([&expected, &expected_other]) {
+        for (i, (a, b)) in got.iter().zip(expected).enumerate() {
+            assert_eq!(a.w, b.w, "state of pixel {i}");
+            assert!((*a - *b).abs().max_element() <= 1e-6, "pixel {i}: GPU {a}, CPU {b}");
+        }
     }
 }
 

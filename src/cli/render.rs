@@ -9,8 +9,8 @@ use clap::Args;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{
-    DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR, EstimatorKind, MAX_CACHE_RESOLUTION,
-    Overrides, RenderParams,
+    DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR, DEFAULT_INDIRECT_FILTER_RADIUS,
+    EstimatorKind, MAX_CACHE_RESOLUTION, Overrides, RenderParams,
 };
 use sensorlight::renderer::{CacheConfig, DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
 use sensorlight::scene::Scene;
@@ -45,6 +45,11 @@ pub struct RenderArgs {
          {MAX_CACHE_RESOLUTION} (sensors per bounce grow with its square) [default: {DEFAULT_CACHE_RESOLUTION}]"
     ))]
     cache_resolution: Option<u32>,
+    #[arg(long, help = format!(
+        "Global illumination: the id-constrained filter's radius for the indirect light alone, in pixels \
+         (0 = off; the direct light keeps its own, --filter-radius) [default: {DEFAULT_INDIRECT_FILTER_RADIUS}]"
+    ))]
+    indirect_filter_radius: Option<u32>,
     #[arg(long, help = format!(
         "Global illumination: rd of the radiance cache's sensors after its first bounce (even for hemicubes) \
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
@@ -85,6 +90,7 @@ impl RenderArgs {
             estimator: self.estimator_kind,
             sensor_size: self.sensor_size,
             cache_resolution: self.cache_resolution,
+            indirect_filter_radius: self.indirect_filter_radius,
             cache_sensor_size: self.cache_sensor_size,
             exposure: self.image.exposure,
             ..self.estimator.overrides()

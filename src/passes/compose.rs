@@ -1,5 +1,7 @@
-//! Composition (docs/DESIGN.md §3 step 7): `final = Le + albedo · R` from the G-buffer and the filtered radiance
-//! map. Shader: `glsl/compose.comp`.
+//! Composition (docs/DESIGN.md §3 step 7): `final = Le + albedo · R` from the G-buffer and R, where R is the
+//! filtered radiance map with its indirect part filtered apart: `R = R_f − I_f + I_i`, `R_f` and `I_f` R and
+//! its indirect part at R's filter radius and `I_i` the indirect part at its own. Also writes that R, the
+//! radiance AOV. Shader: `glsl/compose.comp`.
 
 use std::sync::Arc;
 
@@ -22,25 +24,31 @@ impl ComposePass {
         let kernel = ComputeKernel::new(
             device,
             shaders::COMPOSE_COMP,
-            &[(0, storage), (1, storage), (2, image), (3, image)],
+            &[(0, storage), (1, storage), (2, image), (3, image), (4, storage), (5, storage), (6, storage)],
             size_of::<ImagePush>() as u32,
             1,
         )?;
         Ok(Self { kernel })
     }
 
-    pub fn bind(&self, device: &Device, radiance: &Buffer, target: &Buffer, gbuffer: &GBuffer) {
+    /// `r`: R at R's filter radius, its indirect part at that radius and at its own; `out`: the image and
+    /// the R it was composed from.
+    pub fn bind(&self, device: &Device, r: [&Buffer; 3], out: [&Buffer; 2], gbuffer: &GBuffer) {
         self.kernel
             .writer(0)
-            .storage_buffer(0, radiance)
-            .storage_buffer(1, target)
+            .storage_buffer(0, r[0])
+            .storage_buffer(1, out[0])
             .storage_image(2, gbuffer.albedo.view)
             .storage_image(3, gbuffer.emission.view)
+            .storage_buffer(4, r[1])
+            .storage_buffer(5, r[2])
+            .storage_buffer(6, out[1])
             .apply(device);
     }
 
-    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize) {
-        let push = ImagePush { width: size.width, height: size.height, radius: 0, count: 0 };
+    /// `apart`: whether the indirect part was filtered at a radius of its own (else R is taken as it is).
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, apart: bool) {
+        let push = ImagePush { width: size.width, height: size.height, radius: apart as u32, count: 0 };
         self.kernel.dispatch(enc, 0, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
     }
 }

@@ -12,6 +12,9 @@ use crate::scene::ImageSize;
 use crate::shaders;
 use crate::vk::{Buffer, ComputeKernel, Device, Encoder, transfer};
 
+/// Maps interpolated alike: the radiance map and its indirect part.
+const MAPS: u32 = 2;
+
 pub struct InterpolatePass {
     kernel: ComputeKernel,
     /// Holds the quads bound by the last [`InterpolatePass::bind`].
@@ -27,15 +30,18 @@ impl InterpolatePass {
             shaders::INTERPOLATE_COMP,
             &[(0, storage), (1, storage)],
             size_of::<ImagePush>() as u32,
-            1,
+            MAPS,
         )?;
         Ok(Self { kernel, quads: None, count: 0 })
     }
 
-    /// Uploads `quads` and binds the radiance map they fill (call while the GPU is idle).
-    pub fn bind(&mut self, device: &Arc<Device>, quads: &[GpuQuad], radiance: &Buffer) -> Result<()> {
+    /// Uploads `quads` and binds the maps they fill, the radiance map and its indirect part (call while the
+    /// GPU is idle).
+    pub fn bind(&mut self, device: &Arc<Device>, quads: &[GpuQuad], maps: [&Buffer; MAPS as usize]) -> Result<()> {
         let buffer = transfer::upload(device, "interpolated quads", quads, vk::BufferUsageFlags::STORAGE_BUFFER)?;
-        self.kernel.writer(0).storage_buffer(0, &buffer).storage_buffer(1, radiance).apply(device);
+        for (set, map) in maps.into_iter().enumerate() {
+            self.kernel.writer(set).storage_buffer(0, &buffer).storage_buffer(1, map).apply(device);
+        }
         self.quads = Some(buffer);
         self.count = quads.len() as u32;
         Ok(())
@@ -49,6 +55,8 @@ impl InterpolatePass {
         let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
         let groups = [self.count.min(max_x), self.count.div_ceil(max_x), 1];
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: self.count };
-        self.kernel.dispatch(enc, 0, &push, groups);
+        for set in 0..MAPS as usize {
+            self.kernel.dispatch(enc, set, &push, groups);
+        }
     }
 }

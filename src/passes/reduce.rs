@@ -43,8 +43,9 @@ pub struct ReduceBindings<'a> {
     pub zooms: &'a Buffer,
     /// The emitter pass's irradiance (`vec4` per sensor and chunk).
     pub irradiance: &'a Buffer,
-    /// The radiance map of the current render.
+    /// The radiance map of the current render, and its indirect part (the main layers' share).
     pub radiance: &'a Buffer,
+    pub indirect: &'a Buffer,
 }
 
 impl ReducePass {
@@ -54,7 +55,7 @@ impl ReducePass {
         let (layout, rd) = (desc.layout, desc.rd);
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut bindings = vec![(0, vk::DescriptorType::STORAGE_IMAGE)];
-        bindings.extend((1..=8).map(|b| (b, storage)));
+        bindings.extend((1..=9).map(|b| (b, storage)));
         let kernel =
             ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
         let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
@@ -84,6 +85,7 @@ impl ReducePass {
             .storage_buffer(6, b.zooms)
             .storage_buffer(7, b.irradiance)
             .storage_buffer(8, &self.groups)
+            .storage_buffer(9, b.indirect)
             .apply(device);
     }
 

@@ -58,6 +58,14 @@ pub struct BatchTimes {
     pub drawn_triangles: Option<u64>,
 }
 
+/// What a render's reductions write, a `vec4` per pixel each (w: `gpu_types::radiance_state`): R, and its
+/// indirect part, the main layers' share (all but the exact estimator's emitter term).
+#[derive(Clone)]
+pub struct SensedMaps {
+    pub radiance: Arc<Buffer>,
+    pub indirect: Arc<Buffer>,
+}
+
 /// Receives each completed batch: its sensors' pixels and what the reduction found there.
 pub(crate) type Deliver<'a> = &'a mut dyn FnMut(&[u32], &[GpuSensorResult]);
 
@@ -102,9 +110,9 @@ pub(crate) struct BatchRunner {
     turn: bool,
     /// Bounding box of each light group measured.
     groups: Vec<Aabb>,
-    /// The radiance map the reductions write: every batch submitted keeps it alive until its fence
-    /// signals, so a render that fails with batches in flight cannot free it under the device.
-    radiance: Option<Arc<Buffer>>,
+    /// The maps the reductions write: every batch submitted keeps them alive until its fence signals, so a
+    /// render that fails with batches in flight cannot free them under the device.
+    radiance: Option<SensedMaps>,
     device: Arc<Device>,
     pub times: BatchTimes,
 }
@@ -230,9 +238,10 @@ impl BatchRunner {
         self.slots.len() as u32
     }
 
-    /// Makes the reductions write into `radiance` (a render's radiance map) and resets the times. No batch
-    /// may be in flight: [`BatchRunner::drain`] first.
-    pub fn bind(&mut self, radiance: &Arc<Buffer>) -> Result<()> {
+    /// Makes the reductions write into `maps` (a render's radiance map and its indirect part) and resets the
+    /// times. No batch may be in flight: [`BatchRunner::drain`] first.
+    pub fn bind(&mut self, maps: &SensedMaps) -> Result<()> {
+        let (radiance, indirect) = (&maps.radiance, &maps.indirect);
         ensure!(self.slots.iter().all(|s| s.in_flight.is_empty()), "bind with batches in flight");
         for (i, slot) in self.slots.iter().enumerate() {
             let bindings = ReduceBindings {
@@ -243,6 +252,7 @@ impl BatchRunner {
                 zooms: &slot.zooms,
                 irradiance: &slot.irradiance,
                 radiance,
+                indirect,
             };
             self.reduce.bind(&self.device, i, &bindings);
             if let Some(emitters) = &self.emitters {
@@ -251,7 +261,7 @@ impl BatchRunner {
                 emitters.bind(&self.device, i, &bindings);
             }
         }
-        self.radiance = Some(radiance.clone());
+        self.radiance = Some(maps.clone());
         self.times = BatchTimes { drawn_triangles: self.culling.as_ref().map(|_| 0), ..BatchTimes::default() };
         Ok(())
     }
@@ -316,7 +326,8 @@ impl BatchRunner {
                 Ok(())
             })?;
             slot.commands.submit()?;
-            slot.commands.retire(radiance.clone());
+            slot.commands.retire(radiance.radiance.clone());
+            slot.commands.retire(radiance.indirect.clone());
             for read in self.culling.iter().flat_map(|c| &c.reads) {
                 slot.commands.retire(read.clone());
             }
@@ -383,6 +394,8 @@ impl BatchRunner {
         let count = count.min(self.capacity());
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let scratch = Buffer::new(&self.device, "scratch radiance", 16 * count as u64, usage, MemoryLocation::GpuOnly)?;
+        let scratch_indirect =
+            Buffer::new(&self.device, "scratch indirect", 16 * count as u64, usage, MemoryLocation::GpuOnly)?;
         let slot = &self.slots[0];
         // The pixel list still names the last batch's pixels: point them into the scratch map instead.
         let pixels: Vec<u32> = (0..count).collect();
@@ -396,6 +409,7 @@ impl BatchRunner {
             zooms: &slot.zooms,
             irradiance: &slot.irradiance,
             radiance: &scratch,
+            indirect: &scratch_indirect,
         };
         self.reduce.bind(&self.device, 0, &bindings);
         self.radiance = None; // slot 0 no longer writes the bound map: bind again before sensing

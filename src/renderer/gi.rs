@@ -10,7 +10,7 @@ use anyhow::{Context as _, Result};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 
-use super::batch::BatchRunner;
+use super::batch::{BatchRunner, SensedMaps};
 use super::{Phase, Progress, map_buffer};
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
@@ -136,9 +136,12 @@ pub(super) fn solve(
     let first = first_points(cache);
     let (g, first_g) = (points_as_gbuffer(cache, &first[..n]), points_as_gbuffer(cache, &first));
     // The reductions write R at each sensor's pixel: the first pass has the most.
-    let radiance = Arc::new(map_buffer(device, "radiance cache R", first_g.size)?);
-    runners.first.bind(&radiance)?;
-    runners.later.bind(&radiance)?;
+    let maps = SensedMaps {
+        radiance: Arc::new(map_buffer(device, "radiance cache R", first_g.size)?),
+        indirect: Arc::new(map_buffer(device, "radiance cache R, its indirect part", first_g.size)?),
+    };
+    runners.first.bind(&maps)?;
+    runners.later.bind(&maps)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
     progress.queued(first.len() as u64);
     let direct = CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false };

@@ -20,8 +20,8 @@ use ash::vk;
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 
-use batch::BatchRunner;
 pub use batch::BatchTimes;
+use batch::{BatchRunner, SensedMaps};
 pub use gi::{BounceDone, GiStats};
 pub use probe::probe_pixels;
 pub use stats::{RenderStats, RenderTimes};
@@ -439,11 +439,15 @@ pub struct RenderOutput {
 /// What one render writes on the GPU; dropped when the render returns (all its work waited for).
 struct Targets {
     gbuffer: GBuffer,
-    /// Shared with the batches in flight, which keep it alive until they complete.
-    radiance: Arc<Buffer>,
+    /// R and its indirect part, shared with the batches in flight, which keep them alive until they complete.
+    sensed: SensedMaps,
     /// Which light points each pixel sees, 64 bits a pixel, for the filter (zeros without hints).
     light_masks: Buffer,
+    /// R filtered; its indirect part filtered at R's radius and at its own; what the image is composed from.
     filtered: Buffer,
+    indirect_at_r: Buffer,
+    indirect_own: Buffer,
+    composed: Buffer,
     image: Buffer,
 }
 
@@ -622,8 +626,7 @@ impl Renderer {
     /// (views, recording, submissions, waits): for the strategy self-check and benchmarks.
     pub fn sense_at(&mut self, size: ImageSize, pixels: &[u32], frame: &FrameParams) -> Result<(Vec<Vec4>, Duration)> {
         let (_, g) = self.render_gbuffer(size)?;
-        let radiance = Arc::new(map_buffer(&self.device, "radiance map", size)?);
-        self.runner.bind(&radiance)?;
+        self.runner.bind(&SensedMaps::new(&self.device, size)?)?;
         let mut r = vec![Vec4::ZERO; g.surface.len()];
         let mut deliver =
             |p: &[u32], found: &[GpuSensorResult]| p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
@@ -653,20 +656,24 @@ impl Renderer {
         let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
         let targets = Targets {
             gbuffer: gpu_gbuffer,
-            radiance: Arc::new(map_buffer(&device, "radiance map", size)?),
+            sensed: SensedMaps::new(&device, size)?,
             light_masks: {
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
                 Buffer::new(&device, "light masks", 8 * pixels as u64, usage, MemoryLocation::GpuOnly)?
             },
             filtered: map_buffer(&device, "filtered radiance map", size)?,
+            indirect_at_r: map_buffer(&device, "indirect map at R's filter", size)?,
+            indirect_own: map_buffer(&device, "indirect map, filtered", size)?,
+            composed: map_buffer(&device, "composed radiance map", size)?,
             image: map_buffer(&device, "final image", size)?,
         };
         device.submit_and_wait(|enc| {
-            enc.fill(&targets.radiance, 0);
+            enc.fill(&targets.sensed.radiance, 0);
+            enc.fill(&targets.sensed.indirect, 0);
             enc.fill(&targets.light_masks, 0);
             Ok(())
         })?;
-        self.runner.bind(&targets.radiance)?;
+        self.runner.bind(&targets.sensed)?;
         let gbuffer_time = gbuffer_start.elapsed();
 
         // Sensors on the grid, then rounds of refinement until no quad asks for more (paper §III-G). The
@@ -731,21 +738,37 @@ impl Renderer {
         // Interpolation, filter, composition: one submission.
         progress.phase(Phase::Post);
         let post_start = Instant::now();
-        self.interpolate.bind(&device, refinement.interpolated(), &targets.radiance)?;
-        let filter_inputs = (&targets.gbuffer.surface, &targets.light_masks);
-        self.filter.bind(&device, &targets.radiance, &targets.filtered, filter_inputs.0, filter_inputs.1);
-        self.compose.bind(&device, &targets.filtered, &targets.image, &targets.gbuffer);
+        let (sensed, t) = (&targets.sensed, &targets);
+        self.interpolate.bind(&device, refinement.interpolated(), [&sensed.radiance, &sensed.indirect])?;
+        let (ids, masks) = (&t.gbuffer.surface, &t.light_masks);
+        // The indirect part apart: with global illumination and the exact estimator (whose main layers hold
+        // only it), where its radius is R's own it is not (R's filter already does it).
+        let apart =
+            gi.is_some() && self.runner.measures_lights() && frame.indirect_filter_radius != frame.filter_radius;
+        self.filter.bind(&device, 0, (&sensed.radiance, &t.filtered), ids, masks);
+        self.filter.bind(&device, 1, (&sensed.indirect, &t.indirect_at_r), ids, masks);
+        self.filter.bind(&device, 2, (&sensed.indirect, &t.indirect_own), ids, masks);
+        self.compose.bind(
+            &device,
+            [&t.filtered, &t.indirect_at_r, &t.indirect_own],
+            [&t.image, &t.composed],
+            &t.gbuffer,
+        );
         device.submit_and_wait(|enc| {
             barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
             self.interpolate.record(enc, size);
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.filter.record(enc, size, frame.filter_radius);
+            self.filter.record(enc, 0, size, frame.filter_radius);
+            if apart {
+                self.filter.record(enc, 1, size, frame.filter_radius);
+                self.filter.record(enc, 2, size, frame.indirect_filter_radius);
+            }
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.compose.record(enc, size);
+            self.compose.record(enc, size, apart);
             Ok(())
         })?;
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
-        let radiance = transfer::read_buffer::<Vec4>(&device, &targets.filtered, pixels)?;
+        let radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
         let post_time = post_start.elapsed();
         check_finite(&image, size.width as usize, &device.adapter.driver)?;
 
@@ -804,6 +827,16 @@ fn lod_triangles(hierarchy: &crate::clusters::ClusterMesh) -> Vec<([glam::Vec3; 
         .flat_map(|k| hierarchy.triangles_of(k))
         .map(|t| (t.map(p), hierarchy.vertex_surface[t[0] as usize]))
         .collect()
+}
+
+impl SensedMaps {
+    /// Both maps for an image of `size`.
+    fn new(device: &Arc<Device>, size: ImageSize) -> Result<Self> {
+        Ok(Self {
+            radiance: Arc::new(map_buffer(device, "radiance map", size)?),
+            indirect: Arc::new(map_buffer(device, "indirect map", size)?),
+        })
+    }
 }
 
 /// A radiance-map-sized buffer of `vec4` per pixel, written by compute passes and read back.
