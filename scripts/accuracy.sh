@@ -129,6 +129,8 @@ for table in ${tables[*]}; do
         row gi-small-light "$out/small-light-gi-ref.exr" small-light/small-light.toml --width 160 --height 120
         ref door-ajar-gi door-ajar/door-ajar.toml 80 60 hemicube 262144 "--bounces auto"
         row gi-door-ajar "$out/door-ajar-gi-ref.exr" door-ajar/door-ajar.toml --width 80 --height 60
+        row gi-door-ajar-program-defaults "$out/door-ajar-gi-ref.exr" door-ajar/door-ajar.toml --width 80 --height 60 \
+            --cache-resolution 16 --sensor-size 32
         if [ -f scenes/big/sphere-1000000/scene.toml ]; then
             ref big-gi big/sphere-1000000/scene.toml 64 64 hemicube 4096 "--bounces auto"
             row gi-big "$out/big-gi-ref.exr" big/sphere-1000000/scene.toml --width 64 --height 64

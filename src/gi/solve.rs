@@ -34,6 +34,11 @@ const MIN_EXTRAPOLATED: u32 = 3;
 
 /// Bounces over which λ is measured at most.
 const RATIO_SPAN: usize = 3;
+/// An entry's λ is at most the scene's and this: a room filling through a door converges more slowly than
+/// the scene, but an entry whose additions still grow (light just arriving) is not yet on its tail, and a
+/// ratio near 1 there made the estimate swing from bounce to bounce (the room took 15 bounces instead of 8,
+/// for the same image).
+const RATIO_ABOVE_SCENE: f32 = 0.1;
 
 /// Rec. 709 luminance, the weight of the change (as `compare`).
 const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
@@ -144,7 +149,7 @@ impl Solver {
     }
 
     /// Entry `i`'s λ: the mean ratio of its additions over the bounces [`Solver::ratio`] uses (0 where it
-    /// added nothing then).
+    /// added nothing then), at most [`RATIO_ABOVE_SCENE`] above the scene's.
     fn entry_ratio(&self, i: usize) -> f32 {
         let k = self.history.len();
         let span = (self.changes.len() - 2).min(RATIO_SPAN).min(k - 1);
@@ -152,7 +157,8 @@ impl Solver {
         if first <= 0.0 || last <= 0.0 {
             return 0.0;
         }
-        (last / first).powf(1.0 / span as f32).clamp(0.0, MAX_ALBEDO)
+        let scene = self.ratio().unwrap_or(0.0) as f32;
+        (last / first).powf(1.0 / span as f32).clamp(0.0, MAX_ALBEDO.min(scene + RATIO_ABOVE_SCENE))
     }
 
     /// The cache to gather from: after the last bounce, with `auto` each entry's geometric tail added.
