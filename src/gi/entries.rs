@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use super::grid::Grid;
 use crate::scene::bvh::Bvh;
-use crate::scene::{Aabb, Ray, SurfaceId, Triangle};
+use crate::scene::{Aabb, Ray, SurfaceId, Triangle, stratified_point, triangle_area};
 
 /// Below this share of a cell's face, an unsplit piece reads a neighbour's entries.
 pub const MIN_AREA: f32 = 0.05;
@@ -408,32 +408,24 @@ fn halve(
     Tree::Split { plane: *plane, children: Box::new(children), lit: true }
 }
 
-/// [`SAMPLES_PER_PIECE`] points over `polygons`, stratified by area: point k is at the (k + ½)/K quantile of
-/// the fan triangles' areas, then at an R2 point folded into that triangle (as `sensors::hints` spreads
-/// points over lights), moved a twentieth of the way to its centre: never on the piece's edge, where a wall
-/// that split it stands (a sensor there would see both sides). Deterministic.
+/// [`SAMPLES_PER_PIECE`] points over `polygons`, stratified by area over their fan triangles
+/// (`scene::stratified_point`, as the lights' hint points), each moved a twentieth of the way to its
+/// triangle's centre: never on the piece's edge, where a wall that split it stands (a sensor there would see
+/// both sides). Deterministic.
 fn spread(polygons: &[(Polygon, Vec3)]) -> [Vec3; SAMPLES_PER_PIECE] {
     let fans: Vec<[Vec3; 3]> = polygons
         .iter()
         .flat_map(|(p, _)| (1..p.len.saturating_sub(1)).map(move |i| [p.v[0], p.v[i], p.v[i + 1]]))
         .collect();
-    let areas: Vec<f32> = fans.iter().map(|t| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()).collect();
+    let areas: Vec<f32> = fans.iter().map(triangle_area).collect();
     let total: f32 = areas.iter().sum();
     let fallback = polygons[0].0.v[0];
     std::array::from_fn(|k| {
         if total <= 0.0 || fans.is_empty() {
             return fallback;
         }
-        let mut target = (k as f32 + 0.5) / SAMPLES_PER_PIECE as f32 * total;
-        let i = areas.iter().position(|&a| {
-            target -= a;
-            target <= 0.0
-        });
-        let t = &fans[i.unwrap_or(fans.len() - 1)];
-        let (mut u, mut v) = ((0.5 + 0.754_877_7 * k as f32).fract(), (0.5 + 0.569_840_3 * k as f32).fract());
-        if u + v > 1.0 {
-            (u, v) = (1.0 - u, 1.0 - v);
-        }
+        let (i, u, v) = stratified_point(&areas, total, k, SAMPLES_PER_PIECE);
+        let t = &fans[i];
         let p = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
         p.lerp((t[0] + t[1] + t[2]) / 3.0, 0.05)
     })

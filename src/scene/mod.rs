@@ -255,6 +255,23 @@ pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
     0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
 }
 
+/// Point `k` of `count` spread over triangles of `areas` (their sum `total` > 0), stratified by area: the
+/// triangle holding the (k + ½)/count quantile of the area, and where in it, barycentric `(u, v)` of an R2
+/// point folded into the triangle. Deterministic; the lights' hint points and the radiance cache's spread
+/// points.
+pub fn stratified_point(areas: &[f32], total: f32, k: usize, count: usize) -> (usize, f32, f32) {
+    let mut target = (k as f32 + 0.5) / count as f32 * total;
+    let i = areas.iter().position(|&a| {
+        target -= a;
+        target <= 0.0
+    });
+    let (mut u, mut v) = ((0.5 + 0.754_877_7 * k as f32).fract(), (0.5 + 0.569_840_3 * k as f32).fract());
+    if u + v > 1.0 {
+        (u, v) = (1.0 - u, 1.0 - v);
+    }
+    (i.unwrap_or(areas.len() - 1), u, v)
+}
+
 impl Scene {
     /// A scene of the OBJ mesh at `path` alone: the camera frames it ([`auto_camera`]), the image is `image`,
     /// and the `[render]` table is empty (the defaults).

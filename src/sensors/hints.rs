@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::gbuffer::GBufferData;
 use crate::light::groups::Lights;
 use crate::scene::bvh::Bvh;
-use crate::scene::{NO_SURFACE, Ray, triangle_area};
+use crate::scene::{NO_SURFACE, Ray, stratified_point, triangle_area};
 
 /// Points a group is probed at, at most.
 pub const POINTS_PER_GROUP: usize = 16;
@@ -41,18 +41,8 @@ pub fn light_points(lights: &Lights) -> Vec<LightPoint> {
             continue;
         }
         for k in 0..per_group {
-            // The triangle holding the (k + ½)/K quantile of the area, and where in it: an R2 point folded
-            // into the triangle.
-            let mut target = (k as f32 + 0.5) / per_group as f32 * total;
-            let i = areas.iter().position(|&a| {
-                target -= a;
-                target <= 0.0
-            });
-            let e = &emitters[i.unwrap_or(emitters.len() - 1)];
-            let (mut u, mut v) = ((0.5 + 0.754_877_7 * k as f32).fract(), (0.5 + 0.569_840_3 * k as f32).fract());
-            if u + v > 1.0 {
-                (u, v) = (1.0 - u, 1.0 - v);
-            }
+            let (i, u, v) = stratified_point(&areas, total, k, per_group);
+            let e = &emitters[i];
             let normal = (e.v[1] - e.v[0]).cross(e.v[2] - e.v[0]).normalize_or_zero();
             points.push(LightPoint { position: e.v[0] + (e.v[1] - e.v[0]) * u + (e.v[2] - e.v[0]) * v, normal });
         }
