@@ -138,32 +138,18 @@ fn global_illumination_is_the_default_and_says_what_it_did() {
                usemtl snow\nf 1 2 3 4\nusemtl lamp\nf 5 8 7 6\n";
     std::fs::write(&mesh, obj).unwrap();
     let out = dir.join("bright.exr");
-    let run = common::sensorlight(&[
-        "render",
-        mesh.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--width",
-        "8",
-        "--height",
-        "8",
-    ]);
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", mesh.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "8"];
+        args.extend(["--height", "8"]);
+        args.extend(extra);
+        common::sensorlight(&args)
+    };
+    let run = render(&[]);
     let stderr = common::stderr(&run);
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("global illumination: "), "{stderr}");
     assert_eq!(stderr.matches("global illumination's bounces use at most 0.98").count(), 1, "{stderr}");
-    let direct = common::sensorlight(&[
-        "render",
-        mesh.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--bounces",
-        "0",
-    ]);
+    let direct = render(&["--bounces", "0"]);
     let stderr = common::stderr(&direct);
     assert!(direct.status.success() && !stderr.contains("global illumination"), "{stderr}");
 }
