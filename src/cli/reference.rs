@@ -89,7 +89,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     // Both files or neither: staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    let exr = ExrImage::new(size.width, size.height).rgb("", &result.image);
+    let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
     super::gbuffer_aovs(exr, &result.gbuffer)
         .rgb("radiance", &result.radiance)
         .rgb("std_error", &result.image_std_error())
@@ -97,7 +97,11 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         .stage(&mut files, &args.output)?;
     let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
     if let Some(path) = &png_path {
-        png::stage(&mut files, path, (size.width, size.height), &result.image, resolved.exposure)?;
+        let (exposure, auto) = super::png_exposure(&resolved, &args.scene, &result.image, &result.gbuffer);
+        if auto {
+            say!("{}", super::auto_exposure_text(exposure));
+        }
+        png::stage(&mut files, path, (size.width, size.height), &result.image, exposure)?;
     }
     files.commit()?;
     for path in [Some(&args.output), png_path.as_ref()].into_iter().flatten() {
