@@ -151,3 +151,50 @@ fn a_dim_mesh_is_exposed_automatically_and_the_flag_wins() {
     let written = std::fs::read_to_string(&toml).unwrap();
     assert!(written.contains(&format!("exposure = {stops:.1}")), "{written}");
 }
+
+/// `--aovs` writes what Open Image Denoise takes beside the beauty pass, right on the Cornell box: each
+/// pixel's albedo is its material's Kd (the red wall's among them), normals are unit and face the camera,
+/// depth is the distance along the pixel's ray to what it sees (against a CPU ray cast through the BVH).
+#[test]
+fn aovs_hold_albedo_normal_and_depth_for_a_denoiser() {
+    use glam::Vec3;
+    use sensorlight::scene::{Scene, bvh::Bvh};
+    let dir = common::scratch("first_hour_aovs");
+    let out = dir.join("cornell.exr");
+    let toml = common::project("scenes/cornell/cornell.toml");
+    let (w, h) = (24, 20);
+    let mut args = vec!["render", toml.to_str().unwrap(), "-o", out.to_str().unwrap(), "--aovs"];
+    args.extend_from_slice(&["--width", "24", "--height", "20", "--sensor-size", "16", "--bounces", "0"]);
+    let run = common::sensorlight(&args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let names = ["surface_id", "albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z"];
+    let c = channels(&out, &names);
+    let scene = Scene::load(&toml).unwrap();
+    let bvh = Bvh::build(&scene.mesh.triangles);
+    let red = Vec3::new(0.63, 0.065, 0.05);
+    let (mut on_red, mut surfaces) = (0, 0);
+    for i in 0..w * h {
+        let (x, y) = (i % w, i / w);
+        let id = c[0][i] as u32;
+        let albedo = Vec3::new(c[1][i], c[2][i], c[3][i]);
+        let normal = Vec3::new(c[4][i], c[5][i], c[6][i]);
+        if id == 0 {
+            assert_eq!((albedo, normal, c[7][i]), (Vec3::ZERO, Vec3::ZERO, 0.0), "background pixel {i}");
+            continue;
+        }
+        surfaces += 1;
+        assert_eq!(albedo, scene.mesh.material_of(id).kd, "pixel ({x}, {y}): albedo is its material's Kd");
+        on_red += (albedo == red) as usize;
+        assert!((normal.length() - 1.0).abs() < 1e-4, "pixel ({x}, {y}): |n| = {}", normal.length());
+        let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5, w as u32, h as u32);
+        assert!(normal.dot(ray.dir) < 0.0, "pixel ({x}, {y}): the normal faces the camera");
+        // Away from silhouettes the raster and the ray see the same point.
+        let edge = (x.saturating_sub(1)..(x + 2).min(w))
+            .any(|u| (y.saturating_sub(1)..(y + 2).min(h)).any(|v| c[0][v * w + u] != c[0][i]));
+        if !edge {
+            let t = bvh.intersect(&ray, 0.0, f32::INFINITY).expect("the ray sees what the pixel does").t;
+            assert!((c[7][i] - t).abs() <= 1e-3 * t, "pixel ({x}, {y}): depth {} vs ray {t}", c[7][i]);
+        }
+    }
+    assert!(surfaces > 0 && on_red > 0, "{on_red} pixels on the red wall of {surfaces}");
+}

@@ -226,9 +226,18 @@ fn strategy_event_text(event: &Event) -> Option<String> {
 }
 
 /// The G-buffer channels that let `compare` mask what it should not judge: `surface_id` (silhouettes) and
-/// `emission.*` (emitters, whose `Le` is given, not estimated).
-fn gbuffer_aovs(exr: ExrImage, g: &GBufferData) -> ExrImage {
-    exr.rgb("emission", &g.emission).scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
+/// `emission.*` (emitters, whose `Le` is given, not estimated); and what a denoiser (Open Image Denoise)
+/// takes beside the beauty pass: `albedo.R/G/B` (the material's `Kd`), `normal.X/Y/Z` (the unit shading
+/// normal, world space, turned towards the camera; the mesh is flat-shaded, so the face's) and `depth.Z` (the
+/// distance from `eye` to the visible point along the pixel's ray). All are 0 where no surface is (`A` 0).
+fn gbuffer_aovs(exr: ExrImage, g: &GBufferData, eye: glam::Vec3) -> ExrImage {
+    let depth = g.position.iter().map(|p| if p.w > 0.0 { (p.truncate() - eye).length() } else { 0.0 });
+    let normal: Vec<[f32; 3]> = g.normal.iter().map(|n| n.truncate().to_array()).collect();
+    exr.rgb("emission", &g.emission)
+        .scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
+        .rgb("albedo", &g.albedo)
+        .xyz("normal", &normal)
+        .scalar("depth.Z", depth.collect())
 }
 
 /// The PNG's exposure in stops, and whether it was chosen automatically: `--exposure` or a scene file's

@@ -90,7 +90,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     // Both files or neither: staged, then renamed together.
     let mut files = atomic::Outputs::new();
     let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
-    super::gbuffer_aovs(exr, &result.gbuffer)
+    super::gbuffer_aovs(exr, &result.gbuffer, scene.camera.eye)
         .rgb("radiance", &result.radiance)
         .rgb("std_error", &result.image_std_error())
         .rgb("radiance_std_error", &result.std_error)

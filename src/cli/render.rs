@@ -55,7 +55,9 @@ pub struct RenderArgs {
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
     cache_sensor_size: Option<u32>,
-    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*, surface_id
+    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*,
+    /// surface_id, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world space), depth.Z (distance from
+    /// the eye)
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -302,8 +304,11 @@ fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &
             w if w == radiance_state::INTERPOLATED => 0.5,
             _ => 0.0,
         });
-        exr =
-            super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
+        exr = super::gbuffer_aovs(
+            exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()),
+            &out.gbuffer,
+            scene.camera.eye,
+        );
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();

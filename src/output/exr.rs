@@ -38,6 +38,15 @@ impl ExrImage {
         self.rgb(layer, pixels).scalar(&alpha, pixels.iter().map(|p| p.w).collect())
     }
 
+    /// Adds vectors as `layer.X`, `layer.Y`, `layer.Z` (normals).
+    pub fn xyz(mut self, layer: &str, values: &[[f32; 3]]) -> Self {
+        assert_eq!(values.len(), self.width * self.height, "{layer}: wrong pixel count");
+        for (c, name) in ["X", "Y", "Z"].iter().enumerate() {
+            self.channels.push((format!("{layer}.{name}"), values.iter().map(|v| v[c]).collect()));
+        }
+        self
+    }
+
     /// Adds a single channel.
     pub fn scalar(mut self, name: &str, values: Vec<f32>) -> Self {
         assert_eq!(values.len(), self.width * self.height, "{name}: wrong pixel count");
