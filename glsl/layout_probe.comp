@@ -26,6 +26,7 @@ layout(std430, set = 0, binding = 17) buffer CullNodes { GpuCullNode cull_nodes[
 layout(std430, set = 0, binding = 18) buffer CacheGrids { GpuCacheGrid cache_grids[]; };
 layout(std430, set = 0, binding = 19) buffer CacheSlots { GpuCacheSlot cache_slots[]; };
 layout(std430, set = 0, binding = 20) buffer CacheSplits { GpuCacheSplit cache_splits[]; };
+layout(std430, set = 0, binding = 21) buffer ComposePushes { ComposePush compose_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -50,4 +51,5 @@ void main() {
     cache_grids[1] = cache_grids[0];
     cache_slots[1] = cache_slots[0];
     cache_splits[1] = cache_splits[0];
+    compose_pushes[1] = compose_pushes[0];
 }

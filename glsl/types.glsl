@@ -133,6 +133,18 @@ struct ImagePush {
     uint count;   // number of quads
 };
 
+// Composition (src/gpu_types.rs ComposePush): no-surface pixels show the background.
+struct ComposePush {
+    vec4 background;  // rgb: radiance of rays that leave the scene
+    uint width;
+    uint height;
+    uint apart;       // 1: the indirect part was filtered apart
+    uint _pad;
+};
+
+// Surface id of pixels where no surface is seen (src/scene/mod.rs NO_SURFACE).
+const uint NO_SURFACE = 0u;
+
 // w of the radiance map: how R was obtained (src/gpu_types.rs radiance_state).
 const float STATE_NONE = 0.0;
 const float STATE_SENSED = 1.0;

@@ -240,6 +240,20 @@ pub struct ImagePush {
     pub count: u32,
 }
 
+/// Push constants of the composition pass: the image size, whether R's indirect part was filtered apart, and
+/// the background radiance that pixels without a surface show (docs/DESIGN.md §3 step 8).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ComposePush {
+    /// Radiance of rays that leave the scene (rgb; w unused).
+    pub background: [f32; 4],
+    pub width: u32,
+    pub height: u32,
+    /// 1: R = R_f − I_f + I_i (the indirect part filtered apart); 0: R as it is.
+    pub apart: u32,
+    pub _pad: u32,
+}
+
 /// Values of `w` in the radiance map: how a pixel's R was obtained.
 pub mod radiance_state {
     pub const NONE: f32 = 0.0;

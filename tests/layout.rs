@@ -5,9 +5,9 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    CullPush, EmitterPush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode,
-    GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult, GpuSensorView,
-    GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
+    ComposePush, CullPush, EmitterPush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster,
+    GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult,
+    GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -156,6 +156,7 @@ fn shared_structs_match_glsl() {
         (18, "GpuCacheGrid", rust_layout!(GpuCacheGrid: origin, dims, entries, _pad)),
         (19, "GpuCacheSlot", rust_layout!(GpuCacheSlot: key, entry, _pad)),
         (20, "GpuCacheSplit", rust_layout!(GpuCacheSplit: plane, children, _pad)),
+        (21, "ComposePush", rust_layout!(ComposePush: background, width, height, apart, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -107,7 +107,7 @@ fn gpu_composition_matches_the_cpu_twin() {
     let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.1);
     params.frame.filter_radius = 1;
     let out = common::render(&scene, &params, None);
-    let expected = post::compose(&out.gbuffer, &out.radiance);
+    let expected = post::compose(&out.gbuffer, &out.radiance, params.frame.background);
     assert!(expected.iter().any(|p| p.truncate() != Vec3::ZERO));
     for (i, (a, b)) in out.image.iter().zip(&expected).enumerate() {
         assert!((*a - *b).abs().max_element() <= 1e-5 * b.max_element().max(1.0), "pixel {i}: GPU {a}, CPU {b}");
@@ -129,7 +129,7 @@ fn the_indirect_part_is_filtered_apart() {
         common::render(&scene, &setup, None)
     };
     let (plain, filtered) = (render(0), render(3));
-    let expected = post::compose(&filtered.gbuffer, &filtered.radiance);
+    let expected = post::compose(&filtered.gbuffer, &filtered.radiance, Vec3::ZERO);
     for (i, (a, b)) in filtered.image.iter().zip(&expected).enumerate() {
         assert!((*a - *b).abs().max_element() <= 1e-5 * b.max_element().max(1.0), "pixel {i}: GPU {a}, CPU {b}");
     }
@@ -140,4 +140,26 @@ fn the_indirect_part_is_filtered_apart() {
     let mean = moved.iter().sum::<f32>() / moved.len() as f32;
     assert!(moved.iter().any(|&m| m > 1e-4) && mean < 0.05, "the indirect filter moves R a little: {mean} on average");
     assert_eq!(render(0).radiance, plain.radiance, "radius 0 is R's own (0): the same bits");
+}
+
+/// Pixels where no surface is seen show the background, alpha 0; surfaces keep `Le + Kd·R`, alpha 1; the GPU
+/// and its CPU twin agree on both.
+#[test]
+fn the_background_is_composed_where_no_surface_is_seen() {
+    let scene = common::small_light((32, 24));
+    let background = Vec3::new(0.25, 0.5, 1.0);
+    let mut params = common::every_pixel(SensorKind::Hemicube, 8, 0.1);
+    params.estimator.background = background;
+    params.frame.background = background;
+    let out = common::render(&scene, &params, None);
+    let expected = post::compose(&out.gbuffer, &out.radiance, background);
+    let sky = out.gbuffer.surface.iter().filter(|&&id| id == sensorlight::scene::NO_SURFACE).count();
+    assert!(sky > 0 && sky < out.image.len(), "the view holds background and surface: {sky} background pixels");
+    for (i, (a, b)) in out.image.iter().zip(&expected).enumerate() {
+        assert!((*a - *b).abs().max_element() <= 1e-5 * b.max_element().max(1.0), "pixel {i}: GPU {a}, CPU {b}");
+        match out.gbuffer.surface[i] {
+            sensorlight::scene::NO_SURFACE => assert_eq!(*a, background.extend(0.0), "pixel {i}"),
+            _ => assert_eq!(a.w, 1.0, "pixel {i}"),
+        }
+    }
 }

@@ -99,7 +99,11 @@ pub struct ImageFlags {
     #[arg(
         long,
         allow_negative_numbers = true,
-        help = format!("Exposure of the PNG preview, in stops [default: {DEFAULT_EXPOSURE}]")
+        help = format!(
+            "Exposure of the PNG preview, in stops. Tone mapping is linear: radiance × 2^exposure, clipped to 1, \
+             sRGB-encoded (the EXR is never scaled) [default: the scene file's, else {DEFAULT_EXPOSURE}; a bare \
+             mesh: automatic, its lit pixels' 99th percentile of luminance to white]"
+        )
     )]
     pub exposure: Option<f32>,
     /// Write a tone-mapped sRGB PNG beside the EXR (the default)

@@ -148,6 +148,9 @@ fn load_input(
                 }
             }
             warn_all(&scene.warnings);
+            if say::normal() {
+                scene.notes.iter().for_each(|note| sensorlight::errln!("note: {note}"));
+            }
             resolve(scene, flags)
         }
         kind => bail!("{} is {}; expected a scene file (TOML) or an OBJ mesh", path.display(), kind.describe()),
@@ -223,9 +226,41 @@ fn strategy_event_text(event: &Event) -> Option<String> {
 }
 
 /// The G-buffer channels that let `compare` mask what it should not judge: `surface_id` (silhouettes) and
-/// `emission.*` (emitters, whose `Le` is given, not estimated).
-fn gbuffer_aovs(exr: ExrImage, g: &GBufferData) -> ExrImage {
-    exr.rgb("emission", &g.emission).scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
+/// `emission.*` (emitters, whose `Le` is given, not estimated); and what a denoiser (Open Image Denoise)
+/// takes beside the beauty pass: `albedo.R/G/B` (the material's `Kd`), `normal.X/Y/Z` (the unit shading
+/// normal, world space, turned towards the camera; the mesh is flat-shaded, so the face's) and `depth.Z` (the
+/// distance from `eye` to the visible point along the pixel's ray). All are 0 where no surface is (`A` 0).
+fn gbuffer_aovs(exr: ExrImage, g: &GBufferData, eye: glam::Vec3) -> ExrImage {
+    let depth = g.position.iter().map(|p| if p.w > 0.0 { (p.truncate() - eye).length() } else { 0.0 });
+    let normal: Vec<[f32; 3]> = g.normal.iter().map(|n| n.truncate().to_array()).collect();
+    exr.rgb("emission", &g.emission)
+        .scalar("surface_id", g.surface.iter().map(|&s| s as f32).collect())
+        .rgb("albedo", &g.albedo)
+        .xyz("normal", &normal)
+        .scalar("depth.Z", depth.collect())
+}
+
+/// The PNG's exposure in stops, and whether it was chosen automatically: `--exposure` or a scene file's
+/// `exposure` where set; for a bare mesh (`input` an OBJ), else, the exposure that maps the 99th percentile of
+/// its lit pixels' luminance to white (`png::auto_exposure`; lit: a surface, not an emitter's front, above 0),
+/// so that a dim mesh's PNG is not black; a scene file without one keeps the default.
+fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, bool) {
+    use sensorlight::params::{Origin, Param};
+    if FileKind::of(input) != FileKind::ObjMesh || params.origin(Param::Exposure) != Origin::Default {
+        return (params.exposure, false);
+    }
+    let lit = (image.iter().zip(&g.surface).zip(&g.emission))
+        .filter(|((_, id), le)| **id != sensorlight::scene::NO_SURFACE && le.truncate() == glam::Vec3::ZERO)
+        .map(|((p, _), _)| sensorlight::output::png::luminance(*p));
+    match sensorlight::output::png::auto_exposure(lit) {
+        Some(stops) => (stops, true),
+        None => (params.exposure, false),
+    }
+}
+
+/// What the summary says of an exposure [`png_exposure`] chose.
+fn auto_exposure_text(stops: f32) -> String {
+    format!("exposure {stops:.1} (auto: 99th percentile of lit pixels; --exposure sets it)")
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal, and with `-q`).

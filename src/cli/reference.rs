@@ -89,15 +89,19 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     // Both files or neither: staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    let exr = ExrImage::new(size.width, size.height).rgb("", &result.image);
-    super::gbuffer_aovs(exr, &result.gbuffer)
+    let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
+    super::gbuffer_aovs(exr, &result.gbuffer, scene.camera.eye)
         .rgb("radiance", &result.radiance)
         .rgb("std_error", &result.image_std_error())
         .rgb("radiance_std_error", &result.std_error)
         .stage(&mut files, &args.output)?;
     let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
     if let Some(path) = &png_path {
-        png::stage(&mut files, path, (size.width, size.height), &result.image, resolved.exposure)?;
+        let (exposure, auto) = super::png_exposure(&resolved, &args.scene, &result.image, &result.gbuffer);
+        if auto {
+            say!("{}", super::auto_exposure_text(exposure));
+        }
+        png::stage(&mut files, path, (size.width, size.height), &result.image, exposure)?;
     }
     files.commit()?;
     for path in [Some(&args.output), png_path.as_ref()].into_iter().flatten() {

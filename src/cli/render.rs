@@ -55,7 +55,9 @@ pub struct RenderArgs {
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
     cache_sensor_size: Option<u32>,
-    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*, surface_id
+    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*,
+    /// surface_id, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world space), depth.Z (distance from
+    /// the eye)
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -157,8 +159,37 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         progress.complete();
         progress.finish();
         print_stats(&output.stats, started.elapsed());
+        if say::normal()
+            && let Some(warning) = black_image_warning(&output.image, &scene, &params, &args.scene)
+        {
+            sensorlight::errln!("warning: {warning}");
+        }
         write_outputs(&args, &scene, &params, &output)
     })
+}
+
+/// A pixel is lit above this fraction of the scene's brightest light (its brightest `Ke` component or the
+/// background's): below it, rounding noise, not light.
+const LIT: f32 = 1e-6;
+
+/// Why the image is black and what to do, if no pixel of `image` is lit (see [`LIT`]): a render that exits
+/// 0 with a black image and says nothing leaves its user guessing (a camera outside a closed room).
+fn black_image_warning(image: &[glam::Vec4], scene: &Scene, params: &RenderParams, input: &Path) -> Option<String> {
+    let light = scene.mesh.brightest_emission().max(params.estimator.background.max_element());
+    if image.iter().any(|p| p.truncate().max_element() > LIT * light && light > 0.0) {
+        return None;
+    }
+    let c = &scene.camera;
+    let target = c.eye + c.forward * (scene.mesh.bounds.center() - c.eye).length().max(0.1 * scene.mesh.scale());
+    let why = if light > 0.0 { "no lit surface is in view" } else { "nothing emits light and the background is black" };
+    let fix = match sensorlight::scene::FileKind::of(input) {
+        sensorlight::scene::FileKind::ObjMesh => {
+            "write the scene with --write-scene, move the camera (or set [render] background) and render the scene \
+             file"
+        }
+        _ => "move the camera in the scene file (or light the scene: Ke in the MTL, --background)",
+    };
+    Some(format!("the image is black: {why} (the camera is at {}, looking at {target}); {fix}", c.eye))
 }
 
 /// Removes the preview file when the render ends, whichever way: it showed a render in progress.
@@ -262,25 +293,37 @@ fn print_details(s: &RenderStats) {
 
 fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &RenderOutput) -> Result<()> {
     let size = out.size;
-    let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
+    let (exposure, auto) = super::png_exposure(params, &args.scene, &out.image, &out.gbuffer);
+    if auto && args.image.write_png() && say::normal() {
+        sensorlight::errln!("{}", super::auto_exposure_text(exposure));
+    }
+    let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
     if args.aovs {
         let mask = out.radiance.iter().map(|r| match r.w {
             w if w == radiance_state::SENSED => 1.0,
             w if w == radiance_state::INTERPOLATED => 0.5,
             _ => 0.0,
         });
-        exr =
-            super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
+        exr = super::gbuffer_aovs(
+            exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()),
+            &out.gbuffer,
+            scene.camera.eye,
+        );
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
     exr.stage(&mut files, &args.output)?;
     let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
     if let Some(path) = &png_path {
-        png::stage(&mut files, path, (size.width, size.height), &out.image, params.exposure)?;
+        png::stage(&mut files, path, (size.width, size.height), &out.image, exposure)?;
     }
     if let Some(path) = &args.write_scene {
-        files.stage_bytes(path, scene.to_toml(path)?.as_bytes())?;
+        // The scene file renders as the mesh did: its automatic exposure written down.
+        let mut render = scene.render.clone();
+        if auto {
+            render.insert("exposure".into(), toml::Value::Float(format!("{exposure:.1}").parse().unwrap_or(0.0)));
+        }
+        files.stage_bytes(path, scene.to_toml_with(path, &render)?.as_bytes())?;
     }
     if let Some(path) = &args.stats_json {
         let json = sensorlight::output::json_text(&out.stats).context("stats to JSON")?;

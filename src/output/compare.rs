@@ -14,6 +14,8 @@
 //! - **Emitters** are left out where either image has an `emission` layer (`emission.R/G/B`: what the pixel
 //!   itself emits, as `render --aovs` and the Mitsuba peer write): their `Le` is given, not estimated, and
 //!   would dilute the figure.
+//! - **The background** (a `surface_id` of 0 in either image) is left out where the reference shows it lit:
+//!   its radiance is given (`--background`), both images show it exactly, and it would dilute the figure.
 //! - **Leaks**: pixels the reference leaves black (luminance 0) that the image lights above the lit
 //!   threshold. A figure over lit pixels cannot see light where there should be none; this count does.
 //! - Also reported: the mean absolute relative error (per pixel, luminance), the bias
@@ -67,7 +69,8 @@ pub struct Agreement {
     pub pixels: usize,
     /// Pixels compared: lit and not masked.
     pub lit_pixels: usize,
-    /// Pixels left out: silhouettes (`surface_id` changes in their 3 × 3 neighbourhood) and emitters.
+    /// Pixels left out: silhouettes (`surface_id` changes in their 3 × 3 neighbourhood), emitters and a lit
+    /// background.
     pub masked_pixels: usize,
     /// Whether a `surface_id` channel was found (in either image) to mask silhouettes with.
     pub surface_ids: bool,
@@ -79,6 +82,8 @@ pub struct Agreement {
     pub own_error: Option<f64>,
     /// Emitter pixels left out (an `emission` layer in either image).
     pub emitter_pixels: usize,
+    /// Background pixels left out (`surface_id` 0 where the reference is not black there).
+    pub background_pixels: usize,
     /// Pixels black in the reference that the image lights above the lit threshold.
     pub leaked_pixels: usize,
 }
@@ -188,6 +193,15 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
             masked[i] = true;
         }
     }
+    let mut background_pixels = 0;
+    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten() {
+        for i in 0..n {
+            if ids[i] == 0.0 && !masked[i] && luminance(&b.rgb[i]) > 0.0 {
+                background_pixels += 1;
+                masked[i] = true;
+            }
+        }
+    }
     let unmasked = masked.iter().filter(|&&m| !m).count();
     let mean = b.rgb.iter().zip(&masked).filter(|(_, m)| !**m).map(|(p, _)| luminance(p)).sum::<f64>()
         / unmasked.max(1) as f64;
@@ -230,6 +244,7 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
         own_error: reference_noise.map(|noise| (rel2 / lit as f64 - noise * noise).max(0.0).sqrt()),
         reference_noise,
         emitter_pixels,
+        background_pixels,
         leaked_pixels,
         relative_rmse: (rel2 / lit as f64).sqrt(),
         mean_abs_relative_error: rel_abs / lit as f64,
@@ -253,13 +268,20 @@ impl Agreement {
     /// The figures as a person reads them, one line each; the headline first.
     pub fn summary(&self) -> Vec<String> {
         let masked = if self.surface_ids {
-            format!("{} silhouette pixel(s) masked (surface_id)", self.masked_pixels - self.emitter_pixels)
+            format!(
+                "{} silhouette pixel(s) masked (surface_id)",
+                self.masked_pixels - self.emitter_pixels - self.background_pixels
+            )
         } else {
             "no surface_id channel, so no silhouette masked".to_owned()
         };
         let emitters = match self.emitter_pixels {
             0 => String::new(),
             n => format!(", {n} emitter pixel(s) left out"),
+        };
+        let emitters = match self.background_pixels {
+            0 => emitters,
+            n => format!("{emitters}, {n} background pixel(s) left out"),
         };
         let mut lines = vec![format!(
             "relative RMSE {:.4} (per pixel, luminance, over {} lit pixels of {})",

@@ -31,6 +31,22 @@ impl ExrImage {
         self
     }
 
+    /// Adds the rgb of `pixels` as [`ExrImage::rgb`] does and their w as `A` (or `layer.A`): the image's
+    /// coverage, 1 where a surface is seen and 0 on the background, so that it composites over another.
+    pub fn rgba(self, layer: &str, pixels: &[Vec4]) -> Self {
+        let alpha = if layer.is_empty() { "A".to_owned() } else { format!("{layer}.A") };
+        self.rgb(layer, pixels).scalar(&alpha, pixels.iter().map(|p| p.w).collect())
+    }
+
+    /// Adds vectors as `layer.X`, `layer.Y`, `layer.Z` (normals).
+    pub fn xyz(mut self, layer: &str, values: &[[f32; 3]]) -> Self {
+        assert_eq!(values.len(), self.width * self.height, "{layer}: wrong pixel count");
+        for (c, name) in ["X", "Y", "Z"].iter().enumerate() {
+            self.channels.push((format!("{layer}.{name}"), values.iter().map(|v| v[c]).collect()));
+        }
+        self
+    }
+
     /// Adds a single channel.
     pub fn scalar(mut self, name: &str, values: Vec<f32>) -> Self {
         assert_eq!(values.len(), self.width * self.height, "{name}: wrong pixel count");

@@ -1,4 +1,6 @@
-//! A tone-mapped preview: linear radiance × 2^exposure, clamped, sRGB-encoded, 8-bit PNG.
+//! A tone-mapped preview. The operator is linear: radiance × 2^exposure, clipped to [0, 1] per channel,
+//! sRGB-encoded, 8 bits (no tone curve, so a PNG value is a known radiance). A bare mesh's exposure is chosen
+//! by [`auto_exposure`].
 
 use std::io::Write;
 use std::path::Path;
@@ -18,6 +20,30 @@ pub fn srgb_encode(linear: f32) -> f32 {
 pub fn tone_map(pixels: &[Vec4], exposure: f32) -> Vec<u8> {
     let scale = exposure.exp2();
     pixels.iter().flat_map(|p| [p.x, p.y, p.z].map(|c| (srgb_encode(c * scale) * 255.0 + 0.5) as u8)).collect()
+}
+
+/// The luminance percentile [`auto_exposure`] maps to white: the brightest 1 % of lit pixels (highlights,
+/// a small light's hot spot) may clip, the rest keeps its gradation.
+pub const AUTO_PERCENTILE: f64 = 0.99;
+/// Exposures [`auto_exposure`] keeps to, stops: beyond them the image is black or all light, whatever it is.
+const AUTO_RANGE: f32 = 24.0;
+
+/// Rec. 709 luminance of linear RGB.
+pub fn luminance(p: Vec4) -> f32 {
+    0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z
+}
+
+/// The exposure, in stops rounded to a tenth, that maps the [`AUTO_PERCENTILE`] of `lit` (the luminances of
+/// the pixels to expose for; those ≤ 0 are left out) to white (1); `None` when none is lit.
+pub fn auto_exposure(lit: impl IntoIterator<Item = f32>) -> Option<f32> {
+    let mut y: Vec<f32> = lit.into_iter().filter(|&v| v > 0.0 && v.is_finite()).collect();
+    if y.is_empty() {
+        return None;
+    }
+    let k = ((AUTO_PERCENTILE * y.len() as f64).ceil() as usize).clamp(1, y.len()) - 1;
+    let (_, &mut at, _) = y.select_nth_unstable_by(k, f32::total_cmp);
+    let stops = (-at.log2()).clamp(-AUTO_RANGE, AUTO_RANGE);
+    Some((stops * 10.0).round() / 10.0 + 0.0) // + 0.0: never −0
 }
 
 /// Writes the tone-mapped image atomically.
@@ -64,5 +90,18 @@ mod tests {
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
         assert!((srgb_encode(0.2140) - 0.5).abs() < 1e-3); // 50 % grey is 21.4 % linear
         assert_eq!(tone_map(&[Vec4::new(4.0, 0.5, -1.0, 1.0)], -2.0)[..], [255, 99, 0]); // 0.125 linear is 38.9 % sRGB
+    }
+
+    #[test]
+    fn auto_exposure_maps_the_99th_percentile_to_white() {
+        // 1000 pixels of luminance 0.01 … 10: the 990th is 9.9 → −3.3 stops.
+        let ramp = (1..=1000).map(|i| i as f32 / 100.0);
+        assert_eq!(auto_exposure(ramp), Some(-3.3));
+        // A dim image is brightened: 1/16 → +4 stops; a few bright pixels above the percentile do not count.
+        let dim = (0..1000).map(|i| if i < 5 { 50.0 } else { 0.0625 });
+        assert_eq!(auto_exposure(dim), Some(4.0));
+        assert_eq!(auto_exposure([1.0]), Some(0.0));
+        assert_eq!(auto_exposure([0.0, -1.0, f32::NAN]), None, "nothing lit");
+        assert_eq!(auto_exposure([1e-30]), Some(AUTO_RANGE), "kept to its range");
     }
 }

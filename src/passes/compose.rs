@@ -1,14 +1,18 @@
 //! Composition (docs/DESIGN.md §3 step 7): `final = Le + albedo · R` from the G-buffer and R, where R is the
 //! filtered radiance map with its indirect part filtered apart: `R = R_f − I_f + I_i`, `R_f` and `I_f` R and
 //! its indirect part at R's filter radius and `I_i` the indirect part at its own. Also writes that R, the
-//! radiance AOV. Shader: `glsl/compose.comp`.
+//! radiance AOV. A pixel where no surface is seen (`NO_SURFACE` in the G-buffer) shows the background radiance
+//! with alpha 0, a surface alpha 1: the image's alpha is its coverage. CPU twin: `reference::post::compose`.
+//! Shader: `glsl/compose.comp`.
 
 use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
 
-use crate::gpu_types::ImagePush;
+use glam::Vec3;
+
+use crate::gpu_types::ComposePush;
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::ImageSize;
 use crate::shaders;
@@ -24,8 +28,8 @@ impl ComposePass {
         let kernel = ComputeKernel::new(
             device,
             shaders::COMPOSE_COMP,
-            &[(0, storage), (1, storage), (2, image), (3, image), (4, storage), (5, storage), (6, storage)],
-            size_of::<ImagePush>() as u32,
+            &[(0, storage), (1, storage), (2, image), (3, image), (4, storage), (5, storage), (6, storage), (7, image)],
+            size_of::<ComposePush>() as u32,
             1,
         )?;
         Ok(Self { kernel })
@@ -43,12 +47,20 @@ impl ComposePass {
             .storage_buffer(4, r[1])
             .storage_buffer(5, r[2])
             .storage_buffer(6, out[1])
+            .storage_image(7, gbuffer.surface.view)
             .apply(device);
     }
 
-    /// `apart`: whether the indirect part was filtered at a radius of its own (else R is taken as it is).
-    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, apart: bool) {
-        let push = ImagePush { width: size.width, height: size.height, radius: apart as u32, count: 0 };
+    /// `apart`: whether the indirect part was filtered at a radius of its own (else R is taken as it is);
+    /// `background`: what pixels without a surface show.
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, apart: bool, background: Vec3) {
+        let push = ComposePush {
+            background: background.extend(0.0).to_array(),
+            width: size.width,
+            height: size.height,
+            apart: apart as u32,
+            _pad: 0,
+        };
         self.kernel.dispatch(enc, 0, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
     }
 }

@@ -282,7 +282,7 @@ impl<'a> Integrator<'a> {
         let secondary: u64 = estimates.iter().flatten().map(|(_, rays)| rays).sum();
         let radiance: Vec<Vec4> = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |(e, _)| e.mean.extend(1.0))).collect();
         let std_error = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |(e, _)| e.std_error.extend(1.0))).collect();
-        let image = super::post::compose(&g, &radiance);
+        let image = super::post::compose(&g, &radiance, self.params.background);
         let rays = g.position.len() as u64 + secondary;
         ReferenceImage { gbuffer: g, radiance, std_error, image, rays }
     }

@@ -41,11 +41,13 @@ pub fn filter(source: &[Vec4], ids: &[SurfaceId], masks: &[u64], size: ImageSize
         .collect()
 }
 
-/// `Le + Kd·R` per pixel.
-pub fn compose(g: &GBufferData, radiance: &[Vec4]) -> Vec<Vec4> {
-    radiance
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (g.emission[i].truncate() + g.albedo[i].truncate() * r.truncate()).extend(1.0))
+/// `Le + Kd·R` per pixel, alpha 1, where a surface is seen; `background`, alpha 0, where none is (the
+/// alpha is the pixel's coverage).
+pub fn compose(g: &GBufferData, radiance: &[Vec4], background: Vec3) -> Vec<Vec4> {
+    (radiance.iter().enumerate())
+        .map(|(i, r)| match g.surface[i] {
+            NO_SURFACE => background.extend(0.0),
+            _ => (g.emission[i].truncate() + g.albedo[i].truncate() * r.truncate()).extend(1.0),
+        })
         .collect()
 }

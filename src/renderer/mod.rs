@@ -717,7 +717,7 @@ impl Renderer {
                 readback_per_round.push(self.runner.times.readback_bytes - read_before);
                 let round = per_round.len() as u32;
                 if progress.wants_snapshot(round) {
-                    progress.snapshot(&Snapshot { round, size, image: preview(&g, &r, &refinement) });
+                    progress.snapshot(&Snapshot { round, size, image: preview(&g, &r, &refinement, frame.background) });
                 }
             }
             if refinement.is_finished() {
@@ -764,7 +764,7 @@ impl Renderer {
                 self.filter.record(enc, 2, size, frame.indirect_filter_radius);
             }
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.compose.record(enc, size, apart);
+            self.compose.record(enc, size, apart, frame.background);
             Ok(())
         })?;
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
@@ -794,14 +794,17 @@ impl Renderer {
 
 /// The image so far on the host, from the R sensed (`r`, where `refinement` sensed) interpolated over every
 /// quad: unfiltered, cheap, and only ever a preview (the render's own image comes from the GPU passes).
-fn preview(g: &GBufferData, r: &[Vec4], refinement: &Refinement) -> Vec<Vec4> {
+fn preview(g: &GBufferData, r: &[Vec4], refinement: &Refinement, background: glam::Vec3) -> Vec<Vec4> {
     use crate::gpu_types::radiance_state::SENSED;
     let mut radiance: Vec<Vec4> = (r.iter().enumerate())
         .map(|(i, v)| if refinement.is_sensed(i) { v.truncate().extend(SENSED) } else { Vec4::ZERO })
         .collect();
     crate::sensors::refine::interpolate_cpu(&mut radiance, g.size.width, &refinement.coverage());
-    (g.emission.iter().zip(&g.albedo).zip(&radiance))
-        .map(|((le, kd), r)| (le.truncate() + kd.truncate() * r.truncate()).extend(1.0))
+    (g.surface.iter().zip(&g.emission).zip(&g.albedo).zip(&radiance))
+        .map(|(((&id, le), kd), r)| match id {
+            crate::scene::NO_SURFACE => background.extend(0.0),
+            _ => (le.truncate() + kd.truncate() * r.truncate()).extend(1.0),
+        })
         .collect()
 }
 

@@ -1,10 +1,17 @@
-//! A camera for a bare mesh: it frames the mesh's bounding box, so that `render mesh.obj` shows the whole
-//! mesh without a scene file.
+//! A camera for a bare mesh, so that `render mesh.obj` shows it lit without a scene file. Outside
+//! ([`frame`]): it frames the mesh's bounding box. Inside ([`inside`]): a closed room with its light inside
+//! (Bitterli's *veach ajar*) seen from outside is its roof, black; when the mesh encloses its own centre
+//! (rays from the box's centre hit it in at least [`ENCLOSED`] of [`PROBE_RAYS`] directions) and an emitter
+//! faces that centre, the camera stands at the centre and looks along the longest horizontal axis, towards
+//! the side whose emitters send the centre more light (on a tie, the side with the farther wall), with a
+//! [`INSIDE_VFOV_DEG`] field of view. A closed mesh whose emitters all face away (a lit object, not a room)
+//! keeps the outside view: from inside it nothing lit would be seen.
 
 use anyhow::Result;
 use glam::Vec3;
 
-use super::{Aabb, Camera, ImageSize};
+use super::bvh::Bvh;
+use super::{Aabb, Camera, ImageSize, Mesh, Ray, triangle_area};
 
 /// Full vertical field of view of the automatic camera, degrees: a normal lens, little distortion.
 pub const VFOV_DEG: f32 = 40.0;
@@ -18,6 +25,86 @@ const MARGIN: f32 = 1.05;
 /// area: a box open on one side (the Cornell box, a room without its fourth wall) is seen through the
 /// opening, and a closed mesh, about as much front on either side, keeps the usual side.
 const TURN: f32 = 1.2;
+
+/// Directions probed from the box's centre to decide whether the mesh encloses it (a Fibonacci sphere:
+/// deterministic, even).
+pub const PROBE_RAYS: usize = 256;
+/// The share of [`PROBE_RAYS`] that must hit the mesh for it to enclose its centre: a box open on one side
+/// (the Cornell box) lets about a sixth of them out; a room with a door ajar or a window a few per cent.
+pub const ENCLOSED: f32 = 0.95;
+/// Full vertical field of view of a camera inside: wide enough to show a room's walls, floor and ceiling.
+pub const INSIDE_VFOV_DEG: f32 = 65.0;
+
+/// The automatic camera of `mesh` (see the module documentation): inside when the mesh encloses its lit
+/// centre, else [`frame`]d from outside. The flag says which.
+pub fn for_mesh(mesh: &Mesh, size: ImageSize) -> Result<(Camera, Placement)> {
+    if let Some(camera) = inside(mesh)? {
+        return Ok((camera, Placement::Inside));
+    }
+    let front_area = |forward: Vec3| -> f32 {
+        mesh.triangles.iter().map(|t| triangle_area(&t.v) * (-t.normal.dot(forward)).max(0.0)).sum()
+    };
+    Ok((frame(&mesh.bounds, size, front_area)?, Placement::Outside))
+}
+
+/// Where [`for_mesh`] put the camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// Outside the mesh, framing its bounding box.
+    Outside,
+    /// At the centre of a mesh that encloses it (a closed room).
+    Inside,
+}
+
+/// The camera inside `mesh`, if the mesh encloses its bounding box's centre and an emitter faces that centre
+/// (see the module documentation); `None` otherwise.
+pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
+    let centre = mesh.bounds.center();
+    // Light each emitter sends towards the centre (area × luminance × cosine at the emitter), and where from.
+    let lights: Vec<(Vec3, f32)> = (mesh.triangles.iter())
+        .filter_map(|t| {
+            let ke = mesh.material_of(t.surface).ke;
+            let at = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
+            let cosine = t.normal.dot((centre - at).normalize_or_zero());
+            let power = triangle_area(&t.v) * ke.dot(Vec3::new(0.2126, 0.7152, 0.0722)) * cosine;
+            (power > 0.0).then_some((at, power))
+        })
+        .collect();
+    if lights.is_empty() {
+        return Ok(None); // nothing lit to see from inside: the cheap answer first, before any ray
+    }
+    let bvh = Bvh::build(&mesh.triangles);
+    let eps = 1e-5 * mesh.scale();
+    let distance = |dir: Vec3| bvh.intersect(&Ray::new(centre, dir), eps, f32::INFINITY).map(|h| h.t);
+    let hits = (0..PROBE_RAYS).filter(|&k| distance(fibonacci_direction(k, PROBE_RAYS)).is_some()).count();
+    if (hits as f32) < ENCLOSED * PROBE_RAYS as f32 {
+        return Ok(None);
+    }
+    let extent = mesh.bounds.max - mesh.bounds.min;
+    let axis = if extent.x > extent.z { Vec3::X } else { Vec3::Z };
+    let light_towards = |d: Vec3| -> f32 {
+        lights.iter().map(|&(at, power)| power * (at - centre).normalize_or_zero().dot(d).max(0.0)).sum()
+    };
+    let (ahead, behind) = (light_towards(-axis), light_towards(axis));
+    let open = |d: Vec3| distance(d).unwrap_or(f32::INFINITY);
+    // Within 1 % the lights are a tie (a lamp overhead): then the wider view; −axis where that ties too.
+    let forward = if (ahead - behind).abs() > 0.01 * ahead.max(behind) {
+        if ahead >= behind { -axis } else { axis }
+    } else if open(axis) > open(-axis) {
+        axis
+    } else {
+        -axis
+    };
+    Camera::look_at(centre, centre + forward, Vec3::Y, INSIDE_VFOV_DEG).map(Some)
+}
+
+/// Direction `k` of `n` on a Fibonacci sphere (golden-angle spiral, even in area).
+fn fibonacci_direction(k: usize, n: usize) -> Vec3 {
+    let z = 1.0 - (2.0 * k as f32 + 1.0) / n as f32;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = k as f32 * std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
 
 /// A camera that sees all of `bounds` in an image of `size`: it looks along −z (y up), or, when the box is
 /// thin along x or y, across that thinnest extent, from a distance at which the box's bounding sphere fits
@@ -113,5 +200,59 @@ mod tests {
         let below = frame(&floor, DEFAULT_IMAGE, ceiling).unwrap();
         assert_eq!(below.forward, Vec3::Y);
         assert_framed_camera(&floor, DEFAULT_IMAGE, &below);
+    }
+}
+
+#[cfg(test)]
+mod inside_tests {
+    use super::*;
+    use crate::scene::builtin::{from_groups, rect};
+    use crate::scene::obj::Material;
+
+    /// A closed box 4 × 2.5 × 6 (longest along z) with a light panel on the wall at z = `light_z` facing
+    /// `facing`; `open` leaves out the +z wall.
+    fn room(light_z: f32, facing: Vec3, open: bool) -> Mesh {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+        let c = Vec3::new(0.0, 1.25, 0.0);
+        let mut groups = vec![
+            ("floor", 0, rect(Vec3::ZERO, 2.0 * x, 3.0 * z, y)),
+            ("ceiling", 0, rect(2.5 * y, 2.0 * x, 3.0 * z, -y)),
+            ("left", 0, rect(c - 2.0 * x, 3.0 * z, 1.25 * y, x)),
+            ("right", 0, rect(c + 2.0 * x, 3.0 * z, 1.25 * y, -x)),
+            ("back", 0, rect(c - 3.0 * z, 2.0 * x, 1.25 * y, z)),
+            ("light", 1, rect(Vec3::new(0.0, 1.25, light_z), 0.3 * x, 0.3 * y, facing)),
+        ];
+        if !open {
+            groups.push(("front", 0, rect(c + 3.0 * z, 2.0 * x, 1.25 * y, -z)));
+        }
+        let m = |name: &str, kd: f32, ke: f32| Material { name: name.into(), kd: Vec3::splat(kd), ke: Vec3::splat(ke) };
+        let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0).unwrap();
+        from_groups(groups, vec![m("white", 0.7, 0.0), m("light", 0.0, 5.0)], camera, DEFAULT_IMAGE).mesh
+    }
+
+    #[test]
+    fn a_closed_room_gets_a_camera_inside_looking_towards_its_light() {
+        for (light_z, facing, forward) in [(-2.9, Vec3::Z, Vec3::NEG_Z), (2.9, Vec3::NEG_Z, Vec3::Z)] {
+            let (camera, placement) = for_mesh(&room(light_z, facing, false), DEFAULT_IMAGE).unwrap();
+            assert_eq!(placement, Placement::Inside);
+            assert_eq!(camera.eye, Vec3::new(0.0, 1.25, 0.0));
+            assert!(camera.forward.abs_diff_eq(forward, 1e-6), "{} towards the light at z {light_z}", camera.forward);
+            assert!((camera.vfov.to_degrees() - INSIDE_VFOV_DEG).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn an_open_box_or_a_light_facing_out_keeps_the_outside_camera() {
+        assert_eq!(for_mesh(&room(-2.9, Vec3::Z, true), DEFAULT_IMAGE).unwrap().1, Placement::Outside);
+        // A lit object, not a room: its only light faces away from the centre.
+        assert_eq!(for_mesh(&room(-3.01, Vec3::NEG_Z, false), DEFAULT_IMAGE).unwrap().1, Placement::Outside);
+    }
+
+    #[test]
+    fn probe_directions_are_unit_and_cover_the_sphere() {
+        let dirs: Vec<Vec3> = (0..PROBE_RAYS).map(|k| fibonacci_direction(k, PROBE_RAYS)).collect();
+        assert!(dirs.iter().all(|d| (d.length() - 1.0).abs() < 1e-5));
+        let mean = dirs.iter().sum::<Vec3>() / PROBE_RAYS as f32;
+        assert!(mean.length() < 0.02, "even: mean {mean}");
     }
 }

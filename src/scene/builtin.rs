@@ -33,6 +33,7 @@ pub fn from_groups(
         image: size,
         render,
         warnings,
+        notes: Vec::new(),
         inputs: Vec::new(),
         mesh_file: None,
     }

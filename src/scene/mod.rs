@@ -207,6 +207,8 @@ pub struct Scene {
     pub render: toml::Table,
     /// Warnings met while loading (undefined materials, dropped triangles, no emitter, `Kd` above 1, …).
     pub warnings: Vec<String>,
+    /// What a user should know that is not a problem (where the automatic camera was put, and why).
+    pub notes: Vec<String>,
     /// The files it was read from: the scene file, the mesh, its material libraries (none when built in).
     /// Outputs must not overwrite them.
     pub inputs: Vec<PathBuf>,
@@ -246,7 +248,17 @@ impl Scene {
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
         let mesh_file = Some(mesh_path);
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render: file.render, warnings, inputs, mesh_file })
+        Ok(Self {
+            path: path.to_owned(),
+            mesh,
+            camera,
+            image,
+            render: file.render,
+            warnings,
+            notes: Vec::new(),
+            inputs,
+            mesh_file,
+        })
     }
 }
 
@@ -281,19 +293,35 @@ impl Scene {
         let mut warnings = obj.warnings;
         let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
-        let front_area = |forward: Vec3| -> f32 {
-            mesh.triangles.iter().map(|t| triangle_area(&t.v) * (-t.normal.dot(forward)).max(0.0)).sum()
-        };
-        let camera = auto_camera::frame(&mesh.bounds, image, front_area)
-            .with_context(|| format!("{}: camera", path.display()))?;
+        let (camera, placement) =
+            auto_camera::for_mesh(&mesh, image).with_context(|| format!("{}: camera", path.display()))?;
+        let mut notes = Vec::new();
+        if placement == auto_camera::Placement::Inside {
+            let f = camera.forward;
+            notes.push(format!(
+                "{} encloses its centre and its light: the camera is inside, at {}, looking along ({}, {}, {}) \
+                 (--write-scene writes the scene to edit)",
+                path.display(),
+                camera.eye,
+                f.x,
+                f.y,
+                f.z
+            ));
+        }
         let render = toml::Table::new();
         let mesh_file = Some(path.to_owned());
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render, warnings, inputs: obj.files, mesh_file })
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render, warnings, notes, inputs: obj.files, mesh_file })
     }
 
     /// This scene as a TOML scene file to be written at `toml_path`: the mesh relative to that file's
     /// directory where it lies below it (else absolute), the camera, the image size and the `[render]` table.
     pub fn to_toml(&self, toml_path: &Path) -> Result<String> {
+        self.to_toml_with(toml_path, &self.render)
+    }
+
+    /// [`Scene::to_toml`] with `render` as its `[render]` table (what a render resolved, e.g. its automatic
+    /// exposure, so that the scene file renders as the mesh did).
+    pub fn to_toml_with(&self, toml_path: &Path, render: &toml::Table) -> Result<String> {
         let Some(mesh_path) = &self.mesh_file else { bail!("a built-in scene has no mesh file to name") };
         let dir = toml_path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
         let mesh = std::fs::canonicalize(mesh_path).with_context(|| mesh_path.display().to_string())?;
@@ -307,7 +335,9 @@ impl Scene {
         let vec = |v: Vec3| toml::Value::Array(v.to_array().map(num).to_vec());
         let mut camera = toml::Table::new();
         camera.insert("eye".into(), vec(c.eye));
-        camera.insert("target".into(), vec(c.eye + c.forward * (self.mesh.bounds.center() - c.eye).length()));
+        // A camera inside the mesh stands at its centre: its target is then a tenth of the scene ahead.
+        let reach = (self.mesh.bounds.center() - c.eye).length().max(0.1 * self.mesh.scale());
+        camera.insert("target".into(), vec(c.eye + c.forward * reach));
         camera.insert("up".into(), vec(c.up));
         // Degrees → radians → degrees drifts in the last bit (40 → 40.000004): four decimals are plenty.
         camera.insert("vfov_deg".into(), num((c.vfov.to_degrees() * 1e4).round() / 1e4));
@@ -319,8 +349,8 @@ impl Scene {
         doc.insert("mesh".into(), toml::Value::String(mesh.to_owned()));
         doc.insert("camera".into(), toml::Value::Table(camera));
         doc.insert("image".into(), toml::Value::Table(image));
-        if !self.render.is_empty() {
-            doc.insert("render".into(), toml::Value::Table(self.render.clone()));
+        if !render.is_empty() {
+            doc.insert("render".into(), toml::Value::Table(render.clone()));
         }
         let body = toml::to_string(&doc).context("scene to TOML")?;
         Ok(format!(
