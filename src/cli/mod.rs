@@ -191,10 +191,13 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
     let log = device.validation_log().clone();
     let result = work(&device);
     drop(device);
-    result?;
+    // Said whether the work failed or not: a render stopped part-way must tear down as cleanly as one done.
     let messages = log.messages();
     if !messages.is_empty() {
         sensorlight::errln!("error: the validation layer reported {} message(s)", messages.len());
+    }
+    result?;
+    if !messages.is_empty() {
         return Ok(ExitCode::from(EXIT_VALIDATION));
     }
     Ok(ExitCode::SUCCESS)

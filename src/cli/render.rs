@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result};
 use clap::Args;
+use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{
@@ -121,11 +122,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     // Again with the mesh and its materials, known now.
     super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &scene.input_paths())?;
     let size = args.image.size(&scene)?;
+    // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
+    // and every staged output.
+    let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     super::with_device(args.device, |device| {
         let started = Instant::now();
         let preview =
             preview.map(|path| Preview { every: args.preview_every.unwrap_or(1), path, exposure: params.exposure });
-        let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview);
+        let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview, cancel.clone());
         let _remove_preview = RemoveOnDrop(preview_path(&args.output), args.preview_every.is_some());
         let mut cache = Cache::open_default();
         let mut measured = Vec::new();
@@ -147,6 +151,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             .on_strategy_event(&mut report)
             .build()
             .map_err(|e| super::attribute(&params, e))?;
+        cancel.check()?;
         if let Some(&(_, t)) = measured.iter().find(|(kind, _)| *kind == renderer.strategy()) {
             progress.probe_measured(t);
         }
@@ -156,8 +161,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let output = renderer.render(size, &params.frame(), &progress)?;
         progress.complete();
         progress.finish();
+        cancel.check()?;
         print_stats(&output.stats, started.elapsed());
-        write_outputs(&args, &scene, &params, &output)
+        write_outputs(&args, &scene, &params, &output, &cancel)
     })
 }
 
@@ -260,7 +266,13 @@ fn print_details(s: &RenderStats) {
     );
 }
 
-fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &RenderOutput) -> Result<()> {
+fn write_outputs(
+    args: &RenderArgs,
+    scene: &Scene,
+    params: &RenderParams,
+    out: &RenderOutput,
+    cancel: &Cancel,
+) -> Result<()> {
     let size = out.size;
     let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
     if args.aovs {
@@ -286,6 +298,8 @@ fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &
         let json = sensorlight::output::json_text(&out.stats).context("stats to JSON")?;
         files.stage_bytes(path, json.as_bytes())?;
     }
+    // Stopped while writing: the staged files go with `files`, the older outputs stay as they were.
+    cancel.check()?;
     files.commit()?;
     if say::normal() {
         let written = [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref(), args.write_scene.as_ref()];

@@ -1,0 +1,65 @@
+//! The first hour with real files (issue 24): what a user meets when they stop a render, hand it a
+//! third-party OBJ and MTL, or ask for another kind of output.
+
+mod common;
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Names in `dir`, sorted, hidden (temporary) files included.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// Waits up to `limit` for `done`, polling.
+fn wait_for(limit: Duration, done: impl Fn() -> bool) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if done() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    false
+}
+
+/// A render stopped by SIGINT (Ctrl-C) or SIGTERM once it is sensing (its preview is on disk): it says
+/// "interrupted" once, exits 130 or 143, tears down without a validation message, and leaves no preview, no
+/// temporary file and no output, while the outputs an earlier run left stay as they were.
+#[test]
+fn a_signal_stops_a_render_and_leaves_no_file() {
+    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+        let dir = common::scratch(&format!("signal-{signal}"));
+        let out = dir.join("out.exr");
+        std::fs::write(&out, b"an earlier EXR").unwrap();
+        std::fs::write(dir.join("out.png"), b"an earlier PNG").unwrap();
+        let before = listing(&dir);
+        // Direct light only: the first round's preview comes at once, the render takes some 30 s after it.
+        let child = common::command()
+            .args(["render", "scenes/room/room.toml", "-o", out.to_str().unwrap()])
+            .args(["--width", "128", "--height", "128", "--bounces", "0", "--preview-every", "1"])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let preview = dir.join("out.preview.png");
+        let started = wait_for(Duration::from_secs(120), || preview.exists());
+        assert!(started, "{signal}: no preview appeared");
+        let sent = std::process::Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status();
+        assert!(sent.unwrap().success(), "{signal}: kill failed");
+        let sent_at = Instant::now();
+        let run = child.wait_with_output().unwrap();
+        let stderr = common::stderr(&run);
+        assert_eq!(run.status.code(), Some(code), "{signal}: {stderr}");
+        assert!(sent_at.elapsed() < Duration::from_secs(20), "{signal}: took {:?} to stop", sent_at.elapsed());
+        assert_eq!(stderr.matches("interrupted").count(), 1, "{signal}: said once: {stderr}");
+        for unwanted in ["validation", "panicked", "error", "wrote "] {
+            assert!(!stderr.contains(unwanted), "{signal}: {unwanted:?} in {stderr}");
+        }
+        assert_eq!(listing(&dir), before, "{signal}: no preview, temporary or new output left");
+        assert_eq!(std::fs::read(&out).unwrap(), b"an earlier EXR", "{signal}");
+        assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"an earlier PNG", "{signal}");
+    }
+}
