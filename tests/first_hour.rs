@@ -63,3 +63,38 @@ fn a_signal_stops_a_render_and_leaves_no_file() {
         assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"an earlier PNG", "{signal}");
     }
 }
+
+/// A number followed by a stray `.` (McGuire's `CornellBox-Sphere.obj`, line 5753: `v  0.2300 1.9900
+/// -0.2200.`) no longer refuses the whole file: the mesh renders and the warning names the file and line.
+/// Garbage is still refused with its line.
+#[test]
+fn a_stray_dot_after_a_number_renders_with_a_warning() {
+    let dir = common::scratch("stray-dot");
+    let obj = dir.join("mesh.obj");
+    std::fs::write(&obj, "v -1 -1 0\nv 1 -1 0\nv  0.2300 1.9900 -0.2200.\nf 1 2 3\n").unwrap();
+    let out = dir.join("out.exr");
+    let run = common::sensorlight(&[
+        "render",
+        obj.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--sensor-size",
+        "16",
+        "--bounces",
+        "0",
+    ]);
+    let stderr = common::stderr(&run);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("mesh.obj:3: '-0.2200.' read as -0.2200"), "{stderr}");
+    assert!(out.exists() && dir.join("out.png").exists());
+
+    std::fs::write(&obj, "v -1 -1 0\nv 1 -1 0\nv 0.23 1.2.3 -0.22\nf 1 2 3\n").unwrap();
+    common::expect_failure(
+        &["render", obj.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        "mesh.obj:3: 'v' has a value that is not a number: '1.2.3'",
+    );
+}
