@@ -98,3 +98,27 @@ fn a_stray_dot_after_a_number_renders_with_a_warning() {
         "mesh.obj:3: 'v' has a value that is not a number: '1.2.3'",
     );
 }
+
+/// Mirrors, glass and textures render as plain diffuse: said once per material, naming what is ignored;
+/// what exporters write on diffuse materials (`Ks 0 0 0`, `illum 2`, `Ni 1.5` on an opaque wall) is not.
+#[test]
+fn ignored_material_data_is_said_once_per_material() {
+    let dir = common::scratch("unrendered");
+    let mtl = "newmtl glass\nKd 0.2 0.2 0.2\nNi 1.5\nTf 0.9 0.9 0.9\nillum 7\n\
+               newmtl wall\nKd 0.7 0.7 0.7\nKs 0 0 0\nNs 10\nNi 1.5\nillum 2\n\
+               newmtl brick\nKd 0.5 0.2 0.1\nmap_Kd brick.png\nmap_Kd brick.png\n";
+    std::fs::write(dir.join("materials.mtl"), mtl).unwrap();
+    let obj = "mtllib materials.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl glass\nf 1 2 3\nusemtl wall\nf 2 4 3\n\
+               usemtl brick\nf 1 3 4\nusemtl glass\nf 1 2 4\n";
+    std::fs::write(dir.join("mesh.obj"), obj).unwrap();
+    let size = sensorlight::scene::ImageSize { width: 8, height: 8 };
+    let scene = sensorlight::scene::Scene::from_mesh(&dir.join("mesh.obj"), size).unwrap();
+    let said: Vec<&String> = scene.warnings.iter().filter(|w| w.contains("ignored (treated as diffuse)")).collect();
+    let glass = format!(
+        "{}: material 'glass': Ni, Tf, illum 7 ignored (treated as diffuse)",
+        dir.join("materials.mtl").display()
+    );
+    assert_eq!(said.len(), 2, "{:?}", scene.warnings);
+    assert_eq!(said[0], &glass);
+    assert!(said[1].ends_with("material 'brick': map_Kd ignored (treated as diffuse)"), "{}", said[1]);
+}

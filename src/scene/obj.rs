@@ -16,6 +16,8 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::unrendered::Unrendered;
+
 /// A user error in a scene file, with its location.
 #[derive(Debug, thiserror::Error)]
 #[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
@@ -439,7 +441,7 @@ fn load_mtl(
     };
     let text = read_text(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
     files.push(path.clone());
-    let checked = check_mtl(&path, &text)?;
+    let checked = check_mtl(&path, &text, warnings)?;
     // `check_mtl` rejects everything tobj would; a parse error here must still not pass for "no materials".
     let materials =
         tobj::load_mtl_buf(&mut checked.as_bytes()).map_err(|e| error(&path, None, format!("material parser: {e}")))?;
@@ -449,8 +451,13 @@ fn load_mtl(
 /// Strips `# comments` and checks, with the line, every statement `tobj` would reject (it reports no line,
 /// and its colour parser panics on fewer than three values): colours are 3 finite non-negative numbers,
 /// `Ns`/`Ni`/`d` a number, `illum` a small integer, `newmtl` and the texture maps a name.
-fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
+///
+/// Statements that would change a material's look but are not rendered (mirrors, glass, textures) are said
+/// in `warnings`, once per material (`super::unrendered`).
+fn check_mtl(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<String, LoadError> {
     let mut out = String::with_capacity(text.len());
+    let mut unrendered = Unrendered::new();
+    let file = path.display().to_string();
     for (index, raw) in text.lines().enumerate() {
         let Some(st) = statement(raw) else {
             out.push('\n');
@@ -487,9 +494,11 @@ fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
             }
             _ => {}
         }
+        unrendered.statement(&file, keyword, args);
         out.push_str(&line);
         out.push('\n');
     }
+    warnings.extend(unrendered.warnings(&file));
     Ok(out)
 }
 
