@@ -205,10 +205,13 @@ fn unwritable_outputs_are_refused_before_any_work() {
     let missing = dir.join("missing/x.exr");
     let (exr, missing, dir_s) = (exr.to_str().unwrap(), missing.to_str().unwrap(), dir.to_str().unwrap());
     // The scene does not exist either: the output is checked first.
-    let cases: [(&[&str], &str); 5] = [
+    let png = format!("{dir_s}/x.png");
+    let cases: [(&[&str], &str); 7] = [
         (&["-o", missing], "does not exist"),
-        (&["-o", dir_s], "expected a .exr file name"),
-        (&["-o", &format!("{dir_s}/x.png")], "expected a .exr file name"),
+        (&["-o", dir_s], "expected an .exr file name"),
+        (&["-o", &format!("{dir_s}/x.tif")], "or a .png one (the PNG alone)"),
+        (&["-o", &png, "--aovs"], "--aovs writes its layers into the EXR"),
+        (&["-o", &png, "--no-png"], "nothing would be written"),
         (&["-o", exr, "--stats-json", dir_s], "is a directory"),
         (&["-o", exr, "--stats-json", &format!("{dir_s}/missing/s.json")], "does not exist"),
     ];

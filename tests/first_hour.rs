@@ -122,3 +122,37 @@ fn ignored_material_data_is_said_once_per_material() {
     assert_eq!(said[0], &glass);
     assert!(said[1].ends_with("material 'brick': map_Kd ignored (treated as diffuse)"), "{}", said[1]);
 }
+
+/// `-o out.png` writes the PNG alone; `-o out.exr` the EXR and the PNG beside it; another kind is refused
+/// naming the kinds accepted, and so is `--aovs` with a PNG alone (the layers live in the EXR).
+#[test]
+fn the_output_name_says_which_kinds_are_written() {
+    let tiny = ["--width", "16", "--height", "12", "--sensor-size", "16", "--bounces", "0"];
+    for (name, written) in [("out.png", &["out.png"][..]), ("out.exr", &["out.exr", "out.png"][..])] {
+        let dir = common::scratch(&format!("kinds-{name}"));
+        let out = dir.join(name);
+        let mut args = vec!["render", "scenes/cornell/cornell.toml", "-o", out.to_str().unwrap()];
+        args.extend_from_slice(&tiny);
+        let run = common::sensorlight(&args);
+        let stderr = common::stderr(&run);
+        assert!(run.status.success(), "{name}: {stderr}");
+        assert_eq!(listing(&dir), written, "{name}");
+        for file in written {
+            assert!(stderr.contains(&format!("wrote {}", dir.join(file).display())), "{name}: {stderr}");
+        }
+        let png = std::fs::read(dir.join("out.png")).unwrap();
+        let info = png::Decoder::new(std::io::Cursor::new(png)).read_info().unwrap().info().clone();
+        assert_eq!((info.width, info.height), (16, 12), "{name}");
+    }
+    let dir = common::scratch("kinds-refused");
+    let tif = dir.join("out.tif");
+    let stderr =
+        common::expect_failure(&["render", "scenes/cornell/cornell.toml", "-o", tif.to_str().unwrap()], "out.tif");
+    assert!(stderr.contains("expected an .exr file name") && stderr.contains("or a .png one"), "{stderr}");
+    let png = dir.join("out.png");
+    common::expect_failure(
+        &["render", "scenes/cornell/cornell.toml", "-o", png.to_str().unwrap(), "--aovs"],
+        "--aovs writes its layers into the EXR",
+    );
+    assert!(listing(&dir).is_empty());
+}

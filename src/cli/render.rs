@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, Result};
+use anyhow::{Context as _, Result, ensure};
 use clap::Args;
 use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
@@ -26,8 +26,9 @@ pub struct RenderArgs {
     /// Scene file (TOML), or an OBJ mesh: then a camera frames it, the image is 256×256 unless --width and
     /// --height say otherwise, and a mesh that emits no light is lit by a white sky
     scene: PathBuf,
-    /// Output EXR (linear radiance), written to a temporary name and renamed.
-    #[arg(short, long)]
+    /// Output: F.exr, the EXR of linear radiance, with the tone-mapped F.png beside it (unless --no-png); or
+    /// F.png, the PNG alone. Written to a temporary name and renamed
+    #[arg(short, long, value_name = "F.exr|F.png")]
     output: PathBuf,
     #[command(flatten)]
     estimator: EstimatorFlags,
@@ -56,7 +57,8 @@ pub struct RenderArgs {
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
     cache_sensor_size: Option<u32>,
-    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*, surface_id
+    /// Also write AOVs into the EXR (an .exr output only): radiance.* (R), sensor_mask (1 sensed, 0.5
+    /// interpolated), emission.*, surface_id
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -114,13 +116,20 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     if let Some(path) = &args.write_scene {
         atomic::check_extension(path, "toml")?;
     }
-    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &[&args.scene])?;
+    let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
+    ensure!(
+        !args.aovs || outputs.exr.is_some(),
+        "--aovs writes its layers into the EXR, and -o {} asks for a PNG alone; name an .exr output (its PNG is \
+         written beside it)",
+        args.output.display()
+    );
+    outputs.check(&extra, &[&args.scene])?;
     let (scene, params) = super::load_input(&args.scene, &args.overrides(), (args.image.width, args.image.height))?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
     // Again with the mesh and its materials, known now.
-    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &scene.input_paths())?;
+    outputs.check(&extra, &scene.input_paths())?;
     let size = args.image.size(&scene)?;
     // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
     // and every staged output.
@@ -163,7 +172,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         progress.finish();
         cancel.check()?;
         print_stats(&output.stats, started.elapsed());
-        write_outputs(&args, &scene, &params, &output, &cancel)
+        write_outputs(&args, &outputs, (&scene, &params), &output, &cancel)
     })
 }
 
@@ -268,27 +277,28 @@ fn print_details(s: &RenderStats) {
 
 fn write_outputs(
     args: &RenderArgs,
-    scene: &Scene,
-    params: &RenderParams,
+    outputs: &super::ImageOutputs,
+    (scene, params): (&Scene, &RenderParams),
     out: &RenderOutput,
     cancel: &Cancel,
 ) -> Result<()> {
     let size = out.size;
-    let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
-    if args.aovs {
-        let mask = out.radiance.iter().map(|r| match r.w {
-            w if w == radiance_state::SENSED => 1.0,
-            w if w == radiance_state::INTERPOLATED => 0.5,
-            _ => 0.0,
-        });
-        exr =
-            super::gbuffer_aovs(exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()), &out.gbuffer);
-    }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    exr.stage(&mut files, &args.output)?;
-    let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
-    if let Some(path) = &png_path {
+    if let Some(path) = &outputs.exr {
+        let mut exr = ExrImage::new(size.width, size.height).rgb("", &out.image);
+        if args.aovs {
+            let mask = out.radiance.iter().map(|r| match r.w {
+                w if w == radiance_state::SENSED => 1.0,
+                w if w == radiance_state::INTERPOLATED => 0.5,
+                _ => 0.0,
+            });
+            let with_r = exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect());
+            exr = super::gbuffer_aovs(with_r, &out.gbuffer);
+        }
+        exr.stage(&mut files, path)?;
+    }
+    if let Some(path) = &outputs.png {
         png::stage(&mut files, path, (size.width, size.height), &out.image, params.exposure)?;
     }
     if let Some(path) = &args.write_scene {
@@ -302,8 +312,8 @@ fn write_outputs(
     cancel.check()?;
     files.commit()?;
     if say::normal() {
-        let written = [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref(), args.write_scene.as_ref()];
-        for path in written.into_iter().flatten() {
+        let extra = [args.stats_json.as_ref(), args.write_scene.as_ref()];
+        for path in outputs.paths().chain(extra.into_iter().flatten()) {
             sensorlight::errln!("wrote {}", path.display());
         }
     }
