@@ -156,3 +156,54 @@ fn the_output_name_says_which_kinds_are_written() {
     );
     assert!(listing(&dir).is_empty());
 }
+
+/// `compare --layer radiance` on a render without AOVs says the file has no such layer, what it has, and to
+/// render with `--aovs`.
+#[test]
+fn compare_names_a_missing_layer_and_how_to_get_it() {
+    use glam::Vec4;
+    use sensorlight::output::exr::ExrImage;
+    let dir = common::scratch("compare-layer");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    ExrImage::new(2, 2).rgb("", &[Vec4::splat(0.5); 4]).write(&a).unwrap();
+    ExrImage::new(2, 2).rgb("", &[Vec4::splat(0.5); 4]).write(&b).unwrap();
+    let stderr = common::expect_failure(
+        &["compare", "--layer", "radiance", a.to_str().unwrap(), b.to_str().unwrap()],
+        "a.exr has no layer 'radiance' to compare (it has only the main R, G, B)",
+    );
+    assert!(stderr.contains("render with --aovs"), "{stderr}");
+}
+
+/// The global -v/-q help, shown by every command, does not promise compare a device or a strategy.
+#[test]
+fn compare_help_says_what_verbose_and_quiet_do_there() {
+    let run = common::sensorlight(&["compare", "--help"]);
+    let help = String::from_utf8_lossy(&run.stdout).into_owned();
+    assert!(run.status.success(), "{help}");
+    let verbose = help.lines().skip_while(|l| !l.contains("--verbose")).take(4).collect::<Vec<_>>().join(" ");
+    assert!(!verbose.contains("Say more: the device"), "{verbose}");
+    assert!(verbose.contains("compare have nothing more to say"), "{verbose}");
+    let quiet = help.lines().skip_while(|l| !l.contains("--quiet")).take(3).collect::<Vec<_>>().join(" ");
+    assert!(quiet.contains("results on standard output"), "{quiet}");
+}
+
+/// A mesh named by a bare file name whose MTL is missing: the warning names the directory looked in (`.`),
+/// not an empty one.
+#[test]
+fn a_missing_mtl_beside_a_relative_mesh_names_its_directory() {
+    let dir = common::scratch("relative-mtl");
+    std::fs::write(dir.join("mesh.obj"), "mtllib mesh.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n").unwrap();
+    let run = common::command()
+        .current_dir(&dir)
+        .args(["render", "mesh.obj", "-o", "out.png", "--width", "8", "--height", "8"])
+        .args(["--sensor-size", "16", "--bounces", "0"])
+        .output()
+        .unwrap();
+    let stderr = common::stderr(&run);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("material library 'mesh.mtl' not found (looked in . and for its file name there)"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("looked in  and"), "{stderr}");
+}

@@ -40,10 +40,13 @@ use sensorlight::vk::{Device, DeviceOptions};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Say more: the device, the strategy's self-checks and measurements, per-round statistics
+    /// Say more on standard error where there is more to say: render, bench and metrics name the device;
+    /// render and bench show the strategy's self-checks and measurements, render its per-round statistics;
+    /// devices, reference and compare have nothing more to say
     #[arg(short, long, global = true, conflicts_with = "quiet", display_order = 1000)]
     verbose: bool,
-    /// Say nothing but errors (no warnings, no progress)
+    /// Say nothing on standard error but errors (no warnings, no progress); results on standard output (compare's
+    /// figures, devices' list) are printed all the same
     #[arg(short, long, global = true, display_order = 1000)]
     quiet: bool,
 }

@@ -105,7 +105,8 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let checked = check_obj(path, &text, &mut warnings)?;
     drop(text); // the checked copy is what tobj reads: one copy of a large file in memory, not two
 
-    let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
+    // A bare file name's parent is "": the current directory, said as `.` in messages.
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_owned();
     let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);
     let mtl_warnings = RefCell::new(Vec::new());
     let files = RefCell::new(vec![path.to_owned()]);
