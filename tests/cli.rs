@@ -382,7 +382,8 @@ fn a_mesh_renders_with_an_automatic_camera_and_writes_its_scene() {
         sensorlight::scene::Scene::from_mesh(&mesh, scene.image).unwrap().mesh.triangles.len()
     );
     assert_eq!((scene.image.width, scene.image.height), (16, 16));
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Only the verbatim OBJ's `mtllib scenes/…`, whose MTL is found by its file name beside it.
+    assert!(scene.warnings.iter().all(|w| w.contains("found by file name")), "{:?}", scene.warnings);
 
     // A mesh with no light is lit by a white sky, and says so.
     std::fs::write(dir.join("quad.obj"), "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv 0 1 0\nf 1 4 3 2\nf 1 2 5\n")
