@@ -207,3 +207,13 @@ fn a_missing_mtl_beside_a_relative_mesh_names_its_directory() {
     );
     assert!(!stderr.contains("looked in  and"), "{stderr}");
 }
+
+/// `render --help` says that a mesh without emitters is lit by a white sky, where it names the background's
+/// default.
+#[test]
+fn render_help_names_the_white_sky() {
+    let run = common::sensorlight(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&run.stdout).into_owned();
+    let background = help.lines().skip_while(|l| !l.contains("--background")).take(3).collect::<Vec<_>>().join(" ");
+    assert!(background.contains("nothing emits: 1,1,1, a white sky"), "{background}");
+}
