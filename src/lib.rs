@@ -12,9 +12,11 @@
 //!   tested against (exact polygon irradiance);
 //! - [`gi`]: global illumination, the radiance cache the sensors fill and see, bounce by bounce;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
-//! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user.
+//! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user;
+//!   [`cancel`]: stopping a render part-way (SIGINT, SIGTERM), cleanly.
 
 pub mod bench;
+pub mod cancel;
 pub mod clusters;
 pub mod errors;
 pub mod gbuffer;

@@ -472,7 +472,7 @@ proptest! {
     ) {
         let dir = scratch("mcguire");
         let obj = apply(&shipped("scenes/cornell-mcguire/CornellBox-Original.obj"), &obj_edits);
-        let mtl = apply(&shipped("scenes/cornell-mcguire/scenes/CornellBox-Original.mtl"), &mtl_edits);
+        let mtl = apply(&shipped("scenes/cornell-mcguire/CornellBox-Original.mtl"), &mtl_edits);
         Files::new(&dir).write("CornellBox-Original.mtl", mtl.as_bytes())
             .write("CornellBox-Original.obj", obj.as_bytes())
             .scene(&shipped("scenes/cornell-mcguire/cornell-mcguire.toml")).check()?;

@@ -11,6 +11,7 @@ const RULES: &[(&str, &[&str])] = &[
     ("scene", &[]),
     ("output", &[]),
     ("errors", &[]),
+    ("cancel", &[]),
     ("gpu_types", &[]),
     ("shaders", &[]),
     // CPU algorithms.
@@ -46,6 +47,7 @@ const RULES: &[(&str, &[&str])] = &[
             "light",
             "clusters",
             "gi",
+            "cancel",
         ],
     ),
     // Users of the renderer.

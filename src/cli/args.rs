@@ -33,7 +33,8 @@ pub struct EstimatorFlags {
         )
     )]
     pub epsilon: Option<f32>,
-    /// Radiance of rays leaving the scene, as R,G,B [default: 0,0,0]
+    /// Radiance of rays leaving the scene, as R,G,B [default: 0,0,0; an OBJ mesh given to render or reference in
+    /// which nothing emits: 1,1,1, a white sky]
     #[arg(long, value_parser = parse_rgb, allow_negative_numbers = true)]
     pub background: Option<[f32; 3]>,
 }

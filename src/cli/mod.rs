@@ -19,11 +19,11 @@ mod reference;
 mod render;
 mod say;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
-use anyhow::{Context as _, Result, bail};
+use anyhow::{Context as _, Result, bail, ensure};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::gbuffer::GBufferData;
@@ -40,10 +40,13 @@ use sensorlight::vk::{Device, DeviceOptions};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Say more: the device, the strategy's self-checks and measurements, per-round statistics
+    /// Say more on standard error where there is more to say: render, bench and metrics name the device;
+    /// render and bench show the strategy's self-checks and measurements, render its per-round statistics;
+    /// devices, reference and compare have nothing more to say
     #[arg(short, long, global = true, conflicts_with = "quiet", display_order = 1000)]
     verbose: bool,
-    /// Say nothing but errors (no warnings, no progress)
+    /// Say nothing on standard error but errors (no warnings, no progress); results on standard output (compare's
+    /// figures, devices' list) are printed all the same
     #[arg(short, long, global = true, display_order = 1000)]
     quiet: bool,
 }
@@ -165,16 +168,63 @@ fn attribute(params: &RenderParams, error: anyhow::Error) -> anyhow::Error {
     }
 }
 
-/// Checks, before any work, that an EXR output and what is written beside it (the PNG preview unless
-/// `png` is false, `extra` files with the flag that names each) can be written, and that none of them is
-/// another or one of `inputs`.
-fn check_exr_outputs(exr: &Path, png: bool, extra: &[(&str, &Path)], inputs: &[&Path]) -> Result<()> {
-    sensorlight::output::atomic::check_extension(exr, "exr")?;
-    let png = png.then(|| exr.with_extension("png"));
-    let mut outputs = vec![("-o", exr)];
-    outputs.extend(png.as_deref().map(|p| ("the PNG preview", p)));
-    outputs.extend_from_slice(extra);
-    sensorlight::output::atomic::check_outputs(&outputs, inputs)
+/// What `-o` names, by its extension: `F.exr` the EXR of linear radiance and, unless `--no-png`, the
+/// tone-mapped `F.png` beside it; `F.png` the PNG alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum OutputKind {
+    Exr,
+    Png,
+}
+
+impl OutputKind {
+    fn of(path: &Path) -> Result<Self> {
+        let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match extension.as_deref() {
+            Some("exr") => Ok(OutputKind::Exr),
+            Some("png") => Ok(OutputKind::Png),
+            _ => bail!(
+                "{}: expected an .exr file name (the EXR of linear radiance, with a tone-mapped PNG beside it) or a \
+                 .png one (the PNG alone)",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// The image files a render (or reference) writes, from `-o` and `--png`/`--no-png`.
+struct ImageOutputs {
+    exr: Option<PathBuf>,
+    png: Option<PathBuf>,
+}
+
+impl ImageOutputs {
+    fn new(output: &Path, png: bool) -> Result<Self> {
+        match OutputKind::of(output)? {
+            OutputKind::Exr => {
+                Ok(Self { exr: Some(output.to_owned()), png: png.then(|| output.with_extension("png")) })
+            }
+            OutputKind::Png => {
+                ensure!(png, "--no-png with -o {}: nothing would be written; name an .exr output", output.display());
+                Ok(Self { exr: None, png: Some(output.to_owned()) })
+            }
+        }
+    }
+
+    /// Checks, before any work, that these outputs and `extra` (with the flag that names each) can be written,
+    /// and that none of them is another or one of `inputs`.
+    fn check(&self, extra: &[(&str, &Path)], inputs: &[&Path]) -> Result<()> {
+        let mut outputs: Vec<(&str, &Path)> = Vec::new();
+        outputs.extend(self.exr.as_deref().map(|p| ("-o", p)));
+        let png_flag = if self.exr.is_some() { "the PNG beside the EXR" } else { "-o" };
+        outputs.extend(self.png.as_deref().map(|p| (png_flag, p)));
+        outputs.extend_from_slice(extra);
+        sensorlight::output::atomic::check_outputs(&outputs, inputs)
+    }
+
+    /// The files, in the order written.
+    fn paths(&self) -> impl Iterator<Item = &PathBuf> {
+        self.exr.iter().chain(&self.png)
+    }
 }
 
 /// Exit code when the validation layer reported anything.
@@ -194,10 +244,13 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
     let log = device.validation_log().clone();
     let result = work(&device);
     drop(device);
-    result?;
+    // Said whether the work failed or not: a render stopped part-way must tear down as cleanly as one done.
     let messages = log.messages();
     if !messages.is_empty() {
         sensorlight::errln!("error: the validation layer reported {} message(s)", messages.len());
+    }
+    result?;
+    if !messages.is_empty() {
         return Ok(ExitCode::from(EXIT_VALIDATION));
     }
     Ok(ExitCode::SUCCESS)

@@ -17,6 +17,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
+use sensorlight::cancel::{Cancel, Reason};
 use sensorlight::output::png;
 use sensorlight::renderer::{BounceDone, Phase, Progress, RoundDone, Snapshot};
 
@@ -46,6 +47,8 @@ pub struct RenderProgress {
     shared: Arc<Shared>,
     ticker: Option<(Sender<()>, JoinHandle<()>)>,
     preview: Option<Preview>,
+    /// What the render asks before each batch: whether to stop.
+    cancel: Cancel,
 }
 
 struct Shared {
@@ -79,8 +82,9 @@ struct State {
 }
 
 impl RenderProgress {
-    /// A display for a render of `pixels` pixels, starting with the strategy choice.
-    pub fn new(pixels: u64, preview: Option<Preview>) -> Self {
+    /// A display for a render of `pixels` pixels, starting with the strategy choice; the render stops
+    /// between batches once `cancel` is set.
+    pub fn new(pixels: u64, preview: Option<Preview>, cancel: Cancel) -> Self {
         let show = say::normal();
         let terminal = std::io::stderr().is_terminal();
         let bar = (show && terminal).then(|| {
@@ -105,7 +109,7 @@ impl RenderProgress {
             });
             (stop, handle)
         });
-        Self { shared, ticker, preview }
+        Self { shared, ticker, preview, cancel }
     }
 
     /// Prints `text` above the bar (or as a line), when not `-q`.
@@ -295,6 +299,10 @@ impl Progress for RenderProgress {
 
     fn wants_snapshot(&self, round: u32) -> bool {
         self.preview.as_ref().is_some_and(|p| round.is_multiple_of(p.every))
+    }
+
+    fn cancelled(&self) -> Option<Reason> {
+        self.cancel.reason()
     }
 
     fn snapshot(&self, snapshot: &Snapshot) {

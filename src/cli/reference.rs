@@ -17,8 +17,9 @@ pub struct ReferenceArgs {
     /// Scene file (TOML), or an OBJ mesh (a camera framing it, as `render` does)
     scene: PathBuf,
     /// Output EXR: RGB = Le + Kd·R, plus radiance.* (R), and the estimated noise of each: std_error.* and
-    /// radiance_std_error.* (what `compare` reports as the reference's noise)
-    #[arg(short, long)]
+    /// radiance_std_error.* (what `compare` reports as the reference's noise); the PNG beside it unless
+    /// --no-png. F.png writes the PNG alone
+    #[arg(short, long, value_name = "F.exr|F.png")]
     output: PathBuf,
     #[command(flatten)]
     estimator: EstimatorFlags,
@@ -39,10 +40,11 @@ pub struct ReferenceArgs {
 }
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
-    super::check_exr_outputs(&args.output, args.image.write_png(), &[], &[&args.scene])?;
+    let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
+    outputs.check(&[], &[&args.scene])?;
     let flags = args.bounces.overrides(Overrides { exposure: args.image.exposure, ..args.estimator.overrides() });
     let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height))?;
-    super::check_exr_outputs(&args.output, args.image.write_png(), &[], &scene.input_paths())?;
+    outputs.check(&[], &scene.input_paths())?;
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;
     let integrator = Integrator::new(&scene, params, args.samples, args.seed)?;
@@ -89,14 +91,15 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     // Both files or neither: staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
-    super::gbuffer_aovs(exr, &result.gbuffer, scene.camera.eye)
-        .rgb("radiance", &result.radiance)
-        .rgb("std_error", &result.image_std_error())
-        .rgb("radiance_std_error", &result.std_error)
-        .stage(&mut files, &args.output)?;
-    let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
-    if let Some(path) = &png_path {
+    if let Some(path) = &outputs.exr {
+        let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
+        super::gbuffer_aovs(exr, &result.gbuffer, scene.camera.eye)
+            .rgb("radiance", &result.radiance)
+            .rgb("std_error", &result.image_std_error())
+            .rgb("radiance_std_error", &result.std_error)
+            .stage(&mut files, path)?;
+    }
+    if let Some(path) = &outputs.png {
         let (exposure, auto) = super::png_exposure(&resolved, &args.scene, &result.image, &result.gbuffer);
         if auto {
             say!("{}", super::auto_exposure_text(exposure));
@@ -104,7 +107,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         png::stage(&mut files, path, (size.width, size.height), &result.image, exposure)?;
     }
     files.commit()?;
-    for path in [Some(&args.output), png_path.as_ref()].into_iter().flatten() {
+    for path in outputs.paths() {
         say!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)

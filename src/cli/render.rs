@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, Result};
+use anyhow::{Context as _, Result, ensure};
 use clap::Args;
+use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{
@@ -25,8 +26,9 @@ pub struct RenderArgs {
     /// Scene file (TOML), or an OBJ mesh: then a camera frames it, the image is 256×256 unless --width and
     /// --height say otherwise, and a mesh that emits no light is lit by a white sky
     scene: PathBuf,
-    /// Output EXR (linear radiance), written to a temporary name and renamed.
-    #[arg(short, long)]
+    /// Output: F.exr, the EXR of linear radiance, with the tone-mapped F.png beside it (unless --no-png); or
+    /// F.png, the PNG alone. Written to a temporary name and renamed
+    #[arg(short, long, value_name = "F.exr|F.png")]
     output: PathBuf,
     #[command(flatten)]
     estimator: EstimatorFlags,
@@ -55,9 +57,9 @@ pub struct RenderArgs {
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
     cache_sensor_size: Option<u32>,
-    /// Also write AOVs into the EXR: radiance.* (R), sensor_mask (1 sensed, 0.5 interpolated), emission.*,
-    /// surface_id, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world space), depth.Z (distance from
-    /// the eye)
+    /// Also write AOVs into the EXR (an .exr output only): radiance.* (R), sensor_mask (1 sensed, 0.5
+    /// interpolated), emission.*, surface_id, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world
+    /// space), depth.Z (distance from the eye)
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -115,19 +117,29 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     if let Some(path) = &args.write_scene {
         atomic::check_extension(path, "toml")?;
     }
-    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &[&args.scene])?;
+    let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
+    ensure!(
+        !args.aovs || outputs.exr.is_some(),
+        "--aovs writes its layers into the EXR, and -o {} asks for a PNG alone; name an .exr output (its PNG is \
+         written beside it)",
+        args.output.display()
+    );
+    outputs.check(&extra, &[&args.scene])?;
     let (scene, params) = super::load_input(&args.scene, &args.overrides(), (args.image.width, args.image.height))?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
     // Again with the mesh and its materials, known now.
-    super::check_exr_outputs(&args.output, args.image.write_png(), &extra, &scene.input_paths())?;
+    outputs.check(&extra, &scene.input_paths())?;
     let size = args.image.size(&scene)?;
+    // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
+    // and every staged output.
+    let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     super::with_device(args.device, |device| {
         let started = Instant::now();
         let preview =
             preview.map(|path| Preview { every: args.preview_every.unwrap_or(1), path, exposure: params.exposure });
-        let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview);
+        let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview, cancel.clone());
         let _remove_preview = RemoveOnDrop(preview_path(&args.output), args.preview_every.is_some());
         let mut cache = Cache::open_default();
         let mut measured = Vec::new();
@@ -149,6 +161,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             .on_strategy_event(&mut report)
             .build()
             .map_err(|e| super::attribute(&params, e))?;
+        cancel.check()?;
         if let Some(&(_, t)) = measured.iter().find(|(kind, _)| *kind == renderer.strategy()) {
             progress.probe_measured(t);
         }
@@ -158,13 +171,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         let output = renderer.render(size, &params.frame(), &progress)?;
         progress.complete();
         progress.finish();
+        cancel.check()?;
         print_stats(&output.stats, started.elapsed());
         if say::normal()
             && let Some(warning) = black_image_warning(&output.image, &scene, &params, &args.scene)
         {
             sensorlight::errln!("warning: {warning}");
         }
-        write_outputs(&args, &scene, &params, &output)
+        write_outputs(&args, &outputs, (&scene, &params), &output, &cancel)
     })
 }
 
@@ -291,30 +305,34 @@ fn print_details(s: &RenderStats) {
     );
 }
 
-fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &RenderOutput) -> Result<()> {
+fn write_outputs(
+    args: &RenderArgs,
+    outputs: &super::ImageOutputs,
+    (scene, params): (&Scene, &RenderParams),
+    out: &RenderOutput,
+    cancel: &Cancel,
+) -> Result<()> {
     let size = out.size;
     let (exposure, auto) = super::png_exposure(params, &args.scene, &out.image, &out.gbuffer);
-    if auto && args.image.write_png() && say::normal() {
+    if auto && outputs.png.is_some() && say::normal() {
         sensorlight::errln!("{}", super::auto_exposure_text(exposure));
-    }
-    let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
-    if args.aovs {
-        let mask = out.radiance.iter().map(|r| match r.w {
-            w if w == radiance_state::SENSED => 1.0,
-            w if w == radiance_state::INTERPOLATED => 0.5,
-            _ => 0.0,
-        });
-        exr = super::gbuffer_aovs(
-            exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect()),
-            &out.gbuffer,
-            scene.camera.eye,
-        );
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    exr.stage(&mut files, &args.output)?;
-    let png_path = args.image.write_png().then(|| args.output.with_extension("png"));
-    if let Some(path) = &png_path {
+    if let Some(path) = &outputs.exr {
+        let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
+        if args.aovs {
+            let mask = out.radiance.iter().map(|r| match r.w {
+                w if w == radiance_state::SENSED => 1.0,
+                w if w == radiance_state::INTERPOLATED => 0.5,
+                _ => 0.0,
+            });
+            let with_r = exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect());
+            exr = super::gbuffer_aovs(with_r, &out.gbuffer, scene.camera.eye);
+        }
+        exr.stage(&mut files, path)?;
+    }
+    if let Some(path) = &outputs.png {
         png::stage(&mut files, path, (size.width, size.height), &out.image, exposure)?;
     }
     if let Some(path) = &args.write_scene {
@@ -329,10 +347,12 @@ fn write_outputs(args: &RenderArgs, scene: &Scene, params: &RenderParams, out: &
         let json = sensorlight::output::json_text(&out.stats).context("stats to JSON")?;
         files.stage_bytes(path, json.as_bytes())?;
     }
+    // Stopped while writing: the staged files go with `files`, the older outputs stay as they were.
+    cancel.check()?;
     files.commit()?;
     if say::normal() {
-        let written = [Some(&args.output), png_path.as_ref(), args.stats_json.as_ref(), args.write_scene.as_ref()];
-        for path in written.into_iter().flatten() {
+        let extra = [args.stats_json.as_ref(), args.write_scene.as_ref()];
+        for path in outputs.paths().chain(extra.into_iter().flatten()) {
             sensorlight::errln!("wrote {}", path.display());
         }
     }

@@ -92,8 +92,12 @@ impl Picture {
     /// Reads channel group `layer` (`""` for the main R, G, B) of an EXR, and its `surface_id` if present.
     pub fn read(path: &Path, layer: &str) -> Result<Self> {
         let (width, height, mut channels) = exr::read_all(path)?;
-        let mut take = |name: &str| channels.iter_mut().find(|(n, _)| n == name).map(|(_, v)| std::mem::take(v));
         let prefix = if layer.is_empty() { String::new() } else { format!("{layer}.") };
+        let found = ["R", "G", "B"].iter().all(|c| channels.iter().any(|(n, _)| *n == format!("{prefix}{c}")));
+        if !found {
+            bail!("{}", missing_layer(path, layer, &channels));
+        }
+        let mut take = |name: &str| channels.iter_mut().find(|(n, _)| n == name).map(|(_, v)| std::mem::take(v));
         let mut rgb = Vec::new();
         for c in ["R", "G", "B"] {
             let name = format!("{prefix}{c}");
@@ -125,6 +129,32 @@ impl Picture {
         }
         count
     }
+}
+
+/// Why `layer` cannot be compared in the image at `path` holding `channels`: the layers it has, and for a
+/// render's AOV layer, how to get it (`render --aovs`).
+fn missing_layer(path: &Path, layer: &str, channels: &[(String, Vec<f32>)]) -> String {
+    let mut layers: Vec<String> = Vec::new();
+    for (name, _) in channels {
+        let group = match name.rsplit_once('.') {
+            Some((group, "R" | "G" | "B")) => format!("'{group}'"),
+            None if ["R", "G", "B"].contains(&name.as_str()) => "the main R, G, B".to_owned(),
+            _ => continue,
+        };
+        if !layers.contains(&group) {
+            layers.push(group);
+        }
+    }
+    let has =
+        if layers.is_empty() { "no R, G, B layer at all".to_owned() } else { format!("only {}", layers.join(", ")) };
+    let asked = if layer.is_empty() { "no main R, G, B layer".to_owned() } else { format!("no layer '{layer}'") };
+    let hint = match layer {
+        "radiance" | "emission" => {
+            format!("; render with --aovs to write '{layer}' (`sensorlight reference` always writes it)")
+        }
+        _ => String::new(),
+    };
+    format!("{} has {asked} to compare (it has {has}){hint}", path.display())
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -339,6 +369,25 @@ mod tests {
     fn picture(name: &str, width: usize, rgb: Vec<[f32; 3]>, ids: Option<Vec<f32>>) -> Picture {
         let height = rgb.len() / width;
         Picture { name: name.into(), width, height, rgb, surface_id: ids, std_error: None, emitter: None }
+    }
+
+    /// A layer the file lacks is named with the layers it has; a render's AOV layer says how to get it.
+    #[test]
+    fn a_missing_layer_names_what_the_file_has_and_how_to_get_it() {
+        let channels = |names: &[&str]| names.iter().map(|n| (n.to_string(), Vec::new())).collect::<Vec<_>>();
+        let plain = channels(&["B", "G", "R"]);
+        let path = Path::new("a.exr");
+        assert_eq!(
+            missing_layer(path, "radiance", &plain),
+            "a.exr has no layer 'radiance' to compare (it has only the main R, G, B); render with --aovs to write \
+             'radiance' (`sensorlight reference` always writes it)"
+        );
+        let aovs = channels(&["radiance.B", "radiance.G", "radiance.R", "surface_id"]);
+        assert_eq!(
+            missing_layer(path, "", &aovs),
+            "a.exr has no main R, G, B layer to compare (it has only 'radiance')"
+        );
+        assert!(missing_layer(path, "x", &[]).ends_with("(it has no R, G, B layer at all)"));
     }
 
     /// A reference that knows its noise: the image's own error is what the noise does not explain.

@@ -21,6 +21,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
+use crate::cancel::{Cancelled, Reason};
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{CullPush, GpuSensor, GpuSensorResult, GpuZoom};
@@ -334,6 +335,27 @@ impl BatchRunner {
             slot.in_flight = chunk.to_vec();
             self.times.batches += 1;
             self.times.host_record += start.elapsed();
+        }
+        Ok(())
+    }
+
+    /// [`BatchRunner::sense`], asking `stop` before each batch. When it gives a reason, waits for the batches
+    /// in flight (their results dropped: the work is abandoned) and returns [`Cancelled`]: the device is idle
+    /// and every object is left to its owner.
+    pub fn sense_or_stop(
+        &mut self,
+        g: &GBufferData,
+        pixels: &[u32],
+        ck: CkParams,
+        deliver: Deliver<'_>,
+        stop: &dyn Fn() -> Option<Reason>,
+    ) -> Result<()> {
+        for chunk in pixels.chunks(self.capacity().max(1) as usize) {
+            if let Some(reason) = stop() {
+                self.drain(&mut |_, _| ())?;
+                return Err(Cancelled(reason).into());
+            }
+            self.sense(g, chunk, ck, deliver)?;
         }
         Ok(())
     }

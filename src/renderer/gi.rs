@@ -110,7 +110,7 @@ fn sense(runner: &mut BatchRunner, g: &GBufferData, ck: CkParams, progress: &dyn
         p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r.truncate());
         progress.done(p.len() as u64);
     };
-    runner.sense(g, &all, ck, &mut deliver)?;
+    runner.sense_or_stop(g, &all, ck, &mut deliver, &|| progress.cancelled())?;
     runner.drain(&mut deliver)?;
     Ok(r)
 }

@@ -26,6 +26,7 @@ pub use gi::{BounceDone, GiStats};
 pub use probe::probe_pixels;
 pub use stats::{RenderStats, RenderTimes};
 
+use crate::cancel::Reason;
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
 use crate::gpu_scene::GpuScene;
@@ -102,6 +103,11 @@ pub trait Progress {
     }
     /// The image after a round, when [`Progress::wants_snapshot`] said so.
     fn snapshot(&self, _snapshot: &Snapshot) {}
+    /// Whether to stop: asked before each batch of sensors (the radiance cache's and the camera's). The
+    /// render then waits for the batches in flight and returns [`Cancelled`](crate::cancel::Cancelled).
+    fn cancelled(&self) -> Option<Reason> {
+        None
+    }
 }
 
 /// No progress reporting.
@@ -711,7 +717,7 @@ impl Renderer {
                     }
                     progress.done(p.len() as u64);
                 };
-                self.runner.sense(&g, &pending, ck, &mut deliver)?;
+                self.runner.sense_or_stop(&g, &pending, ck, &mut deliver, &|| progress.cancelled())?;
                 self.runner.drain(&mut deliver)?;
                 per_round.push(pending.len() as u64);
                 readback_per_round.push(self.runner.times.readback_bytes - read_before);

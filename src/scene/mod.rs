@@ -10,6 +10,7 @@ pub mod kind;
 pub mod obj;
 pub mod ray;
 pub mod surfaces;
+mod unrendered;
 
 use std::path::{Path, PathBuf};
 

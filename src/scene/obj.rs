@@ -5,7 +5,9 @@
 //! as keyword, one space, arguments), `vt u` without v, vertex colours on some vertices only (dropped: unused
 //! here), statements `tobj` does not know (curves, `lod`, …; dropped with a warning), and an `mtllib` path
 //! written relative to some other directory (looked for by file name next to the OBJ). Lines (`l`) and points
-//! (`p`) are checked and dropped: `tobj` would make a triangle of a three-point line.
+//! (`p`) are checked and dropped: `tobj` would make a triangle of a three-point line. A number followed by a
+//! stray `.` (`-0.2200.`) is read without it, with a warning naming its line, as common OBJ loaders read it;
+//! other words that are no number (`1.2.3`, `abc`, `1e`) are refused with their line.
 
 use std::cell::RefCell;
 use std::collections::BTreeSet;
@@ -13,6 +15,8 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+
+use super::unrendered::Unrendered;
 
 /// A user error in a scene file, with its location.
 #[derive(Debug, thiserror::Error)]
@@ -101,7 +105,8 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let checked = check_obj(path, &text, &mut warnings)?;
     drop(text); // the checked copy is what tobj reads: one copy of a large file in memory, not two
 
-    let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
+    // A bare file name's parent is "": the current directory, said as `.` in messages.
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_owned();
     let mtl_error: RefCell<Option<LoadError>> = RefCell::new(None);
     let mtl_warnings = RefCell::new(Vec::new());
     let files = RefCell::new(vec![path.to_owned()]);
@@ -207,15 +212,16 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
     let mut used_materials: Vec<(String, usize)> = Vec::new();
     let mut counts = [0usize; 3]; // v, vt, vn seen so far
     let mut ignored = BTreeSet::new();
+    let mut stray_dots: Vec<(usize, String)> = Vec::new();
     for (index, raw) in text.lines().enumerate() {
         let line_no = index + 1;
         let err = |message: String| error(path, Some(line_no), message);
-        let Some(st) = statement(raw) else {
+        let Some(mut st) = statement(raw) else {
             out.push('\n');
             continue;
         };
-        let (keyword, args) = (st.keyword, &st.args);
         let mut line = st.normalised();
+        let (keyword, args) = (st.keyword, &mut st.args);
         match keyword {
             "v" => {
                 // x y z [w] or x y z r g b
@@ -225,8 +231,8 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                         args.len()
                     )));
                 }
-                let values =
-                    parse_numbers(args).map_err(|bad| err(format!("'v' has a value that is not a number: '{bad}'")))?;
+                let values = parse_lenient(args, line_no, &mut stray_dots)
+                    .map_err(|bad| err(format!("'v' has a value that is not a number: '{bad}'")))?;
                 if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
                     return Err(err(format!("vertex coordinate {bad} is not finite")));
                 }
@@ -240,19 +246,20 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                         return Err(err(format!("vertex coordinate divided by its weight w {w} is {bad}, not finite")));
                     }
                 }
-                if args.len() == 6 {
-                    // Vertex colours are not used here, and tobj fails on a face whose vertices are not all
-                    // coloured: keep the position only.
-                    line = format!("v {} {} {}", args[0], args[1], args[2]);
-                }
+                // The numbers as read (a stray trailing '.' dropped), so tobj reads what was checked. Vertex
+                // colours are not used here, and tobj fails on a face whose vertices are not all coloured:
+                // of x y z r g b, keep the position only.
+                let kept = if args.len() == 6 { &args[..3] } else { &args[..] };
+                line = numbers_line("v", kept);
                 counts[0] += 1;
             }
             "vt" | "vn" => {
-                let values = parse_numbers(args)
+                let values = parse_lenient(args, line_no, &mut stray_dots)
                     .map_err(|bad| err(format!("'{keyword}' has a value that is not a number: '{bad}'")))?;
                 if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
                     return Err(err(format!("'{keyword}' value {bad} is not finite")));
                 }
+                line = numbers_line(keyword, args);
                 if keyword == "vt" {
                     if !(1..=3).contains(&values.len()) {
                         return Err(err(format!("'vt' takes 1 to 3 values (u [v [w]]), found {}", values.len())));
@@ -314,6 +321,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
         out.push_str(&line);
         out.push('\n');
     }
+    warn_stray_dots(path, &stray_dots, warnings);
     if !ignored.is_empty() {
         warnings.push(format!(
             "{}: ignored statements this renderer does not use: {}",
@@ -326,6 +334,60 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
 
 fn parse_numbers<'a>(args: &[&'a str]) -> Result<Vec<f32>, &'a str> {
     args.iter().map(|a| a.parse::<f32>().map_err(|_| *a)).collect()
+}
+
+/// A number as common OBJ loaders read it: as written, or, when a stray `.` follows it (`-0.2200.`, in
+/// McGuire's `CornellBox-Sphere.obj`), without that dot. Anything else that is not a number (`1.2.3`,
+/// `abc`, `1e`) is refused.
+fn lenient_number(word: &str) -> Option<(f32, Option<&str>)> {
+    if let Ok(x) = word.parse::<f32>() {
+        return Some((x, None));
+    }
+    let trimmed = word.strip_suffix('.')?;
+    // Only a dot after a digit: `.` and `-.` are no numbers, `1e.` no exponent.
+    if !trimmed.ends_with(|c: char| c.is_ascii_digit()) {
+        return None;
+    }
+    trimmed.parse::<f32>().ok().map(|x| (x, Some(trimmed)))
+}
+
+/// [`parse_numbers`] with [`lenient_number`]: each word read without its stray dot is noted as
+/// (line, word) in `fixed`, and replaced in `args` by what was read.
+fn parse_lenient<'a>(args: &mut [&'a str], line: usize, fixed: &mut Vec<(usize, String)>) -> Result<Vec<f32>, &'a str> {
+    let mut values = Vec::with_capacity(args.len());
+    for arg in args.iter_mut() {
+        let (x, trimmed) = lenient_number(arg).ok_or(*arg)?;
+        if let Some(trimmed) = trimmed {
+            fixed.push((line, arg.to_string()));
+            *arg = trimmed;
+        }
+        values.push(x);
+    }
+    Ok(values)
+}
+
+/// A statement of numbers, rebuilt: keyword, one space, the numbers as read.
+fn numbers_line(keyword: &str, args: &[&str]) -> String {
+    std::iter::once(keyword).chain(args.iter().copied()).collect::<Vec<_>>().join(" ")
+}
+
+/// Numbers shown one warning each before the rest are counted.
+const STRAY_DOTS_SHOWN: usize = 5;
+
+/// One warning per number read without its stray dot (`file:line: '-0.2200.' read as -0.2200`), the
+/// first few, then how many more.
+fn warn_stray_dots(path: &Path, fixed: &[(usize, String)], warnings: &mut Vec<String>) {
+    for (line, word) in fixed.iter().take(STRAY_DOTS_SHOWN) {
+        let read = &word[..word.len() - 1];
+        warnings.push(format!("{}:{line}: '{word}' read as {read}", path.display()));
+    }
+    if fixed.len() > STRAY_DOTS_SHOWN {
+        warnings.push(format!(
+            "{}: {} more numbers followed by a stray '.' read without it",
+            path.display(),
+            fixed.len() - STRAY_DOTS_SHOWN
+        ));
+    }
 }
 
 /// `v`, `v/vt`, `v//vn` or `v/vt/vn`: 1-based, or negative counting back from the last element defined.
@@ -380,7 +442,7 @@ fn load_mtl(
     };
     let text = read_text(&path).map_err(|e| error(&path, None, format!("cannot read: {e}")))?;
     files.push(path.clone());
-    let checked = check_mtl(&path, &text)?;
+    let checked = check_mtl(&path, &text, warnings)?;
     // `check_mtl` rejects everything tobj would; a parse error here must still not pass for "no materials".
     let materials =
         tobj::load_mtl_buf(&mut checked.as_bytes()).map_err(|e| error(&path, None, format!("material parser: {e}")))?;
@@ -390,8 +452,13 @@ fn load_mtl(
 /// Strips `# comments` and checks, with the line, every statement `tobj` would reject (it reports no line,
 /// and its colour parser panics on fewer than three values): colours are 3 finite non-negative numbers,
 /// `Ns`/`Ni`/`d` a number, `illum` a small integer, `newmtl` and the texture maps a name.
-fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
+///
+/// Statements that would change a material's look but are not rendered (mirrors, glass, textures) are said
+/// in `warnings`, once per material (`super::unrendered`).
+fn check_mtl(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<String, LoadError> {
     let mut out = String::with_capacity(text.len());
+    let mut unrendered = Unrendered::new();
+    let file = path.display().to_string();
     for (index, raw) in text.lines().enumerate() {
         let Some(st) = statement(raw) else {
             out.push('\n');
@@ -428,8 +495,59 @@ fn check_mtl(path: &Path, text: &str) -> Result<String, LoadError> {
             }
             _ => {}
         }
+        unrendered.statement(&file, keyword, args);
         out.push_str(&line);
         out.push('\n');
     }
+    warnings.extend(unrendered.warnings(&file));
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh directory holding `files` (name, content).
+    fn files(name: &str, files: &[(&str, &str)]) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("sensorlight-obj-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for (file, text) in files {
+            std::fs::write(dir.join(file), text).unwrap();
+        }
+        dir
+    }
+
+    /// McGuire's `CornellBox-Sphere.obj`, line 5753: `v  0.2300 1.9900 -0.2200.`.
+    #[test]
+    fn a_stray_dot_after_a_number_is_read_without_it_and_said() {
+        let obj = "v 0 0 0\nv 1 0 0\nv  0.2300 1.9900 -0.2200.\nvn 0 0 1.\nvt 0.5. 1\nf 1 2 3\n";
+        let dir = files("stray-dot", &[("mesh.obj", obj)]);
+        let data = load(&dir.join("mesh.obj")).unwrap();
+        let triangle = data.groups[0].triangles[0];
+        assert_eq!(triangle[2], Vec3::new(0.23, 1.99, -0.22));
+        let said: Vec<&String> = data.warnings.iter().filter(|w| w.contains("read as")).collect();
+        assert_eq!(said.len(), 2, "{:?}", data.warnings); // `1.` is a number as it is
+        assert!(said[0].ends_with("mesh.obj:3: '-0.2200.' read as -0.2200"), "{}", said[0]);
+        assert!(said[1].ends_with("mesh.obj:5: '0.5.' read as 0.5"), "{}", said[1]);
+        // Many are counted, not each said.
+        let many: String = (0..9).map(|i| format!("v {i}. 0 0.5.\n")).collect();
+        let dir = files("stray-dots", &[("mesh.obj", &(many + "f 1 2 3\n"))]);
+        let warnings = load(&dir.join("mesh.obj")).unwrap().warnings;
+        assert_eq!(warnings.iter().filter(|w| w.contains("read as")).count(), STRAY_DOTS_SHOWN, "{warnings:?}");
+        assert!(
+            warnings.iter().any(|w| w.ends_with("mesh.obj: 4 more numbers followed by a stray '.' read without it"))
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn garbage_is_still_refused_with_its_line() {
+        for bad in ["1.2.3", "abc", "1e", "1e.", ".", "-.", "1..", "1.2.3."] {
+            let dir = files("garbage", &[("mesh.obj", &format!("v 0 0 0\nv 1 {bad} 0\n"))]);
+            let e = load(&dir.join("mesh.obj")).err().unwrap_or_else(|| panic!("{bad} accepted"));
+            assert_eq!(e.line, Some(2), "{bad}");
+            assert!(e.to_string().contains(&format!("not a number: '{bad}'")), "{bad}: {e}");
+        }
+    }
 }
