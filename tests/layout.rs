@@ -96,7 +96,7 @@ fn shared_structs_match_glsl() {
         (8, "GpuZoom", rust_layout!(GpuZoom: right, up, forward)),
         (9, "GpuEmitter", rust_layout!(GpuEmitter: v0, v1, v2, ke)),
         (10, "GpuLightGroup", rust_layout!(GpuLightGroup: first_chunk, chunks, _pad)),
-        (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility)),
+        (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility, rest)),
         (12, "GpuEmitterChunk", rust_layout!(GpuEmitterChunk: first, count, group, _pad)),
         (13, "EmitterPush", rust_layout!(EmitterPush: sensors, chunks, groups, _pad)),
         (
