@@ -137,7 +137,7 @@ struct ImagePush {
 // Interpolation with the emitters' light computed per pixel (src/gpu_types.rs ExactInterpolatePush).
 struct ExactInterpolatePush {
     uint width;
-    uint count;   // number of quads
+    uint count;   // number of pixels to fill
     uint groups;  // light groups
     float bias;   // a sensor's lift above its surface, world units
 };

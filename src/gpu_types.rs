@@ -237,7 +237,7 @@ pub struct GpuQuad {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ExactInterpolatePush {
     pub width: u32,
-    /// Number of quads.
+    /// Number of pixels to fill.
     pub count: u32,
     /// Light groups.
     pub groups: u32,

@@ -235,7 +235,9 @@ fn gpu_exact_interpolation_matches_the_cpu_twin() {
         let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
         let indirect_map = transfer::upload(device, "indirect", &indirect, usage).unwrap();
         let mut pass = InterpolatePass::new(device).unwrap();
-        let exact = Exact { corner_visibility: &corners, gbuffer: &gbuffer, scene: &gpu_scene, bias };
+        let is_sensed = |i: usize| sensed[i];
+        let exact =
+            Exact { sensed: &is_sensed, corner_visibility: &corners, gbuffer: &gbuffer, scene: &gpu_scene, bias };
         pass.bind(device, &quads, [&radiance, &indirect_map], Some(exact)).unwrap();
         device
             .submit_and_wait(|enc| {

@@ -25,14 +25,17 @@ pub struct InterpolatePass {
     /// Holds the quads bound by the last [`InterpolatePass::bind`], and their corners' visibilities.
     quads: Option<Buffer>,
     corners: Option<Buffer>,
+    fills: Option<Buffer>,
     count: u32,
-    /// With [`Exact`]: light groups and the sensors' lift.
-    exact_push: Option<(u32, f32)>,
+    /// With [`Exact`]: light groups, the sensors' lift and the pixels to fill.
+    exact_push: Option<(u32, f32, u32)>,
 }
 
 /// What the exact interpolation reads besides the maps: the corners' measured visibilities, each
-/// `[quad][corner 00, 10, 01, 11][group of MAX_GROUPS]` (< 0: not measured), and where each pixel is.
+/// `[quad][corner 00, 10, 01, 11][group of MAX_GROUPS]` (< 0: not measured), where each pixel is, and which
+/// pixels were sensed (the others of each quad's own are filled).
 pub struct Exact<'a> {
+    pub sensed: &'a dyn Fn(usize) -> bool,
     pub corner_visibility: &'a [[[f32; MAX_GROUPS]; 4]],
     pub gbuffer: &'a GBuffer,
     pub scene: &'a GpuScene,
@@ -60,6 +63,7 @@ impl InterpolatePass {
             (6, storage),
             (7, storage),
             (8, storage),
+            (9, storage),
         ];
         let exact = ComputeKernel::new(
             device,
@@ -68,7 +72,7 @@ impl InterpolatePass {
             size_of::<ExactInterpolatePush>() as u32,
             1,
         )?;
-        Ok(Self { kernel, exact, quads: None, corners: None, count: 0, exact_push: None })
+        Ok(Self { kernel, exact, quads: None, corners: None, fills: None, count: 0, exact_push: None })
     }
 
     /// Uploads `quads` and binds the maps they fill, the radiance map and its indirect part (call while the
@@ -86,11 +90,20 @@ impl InterpolatePass {
         for (set, map) in maps.into_iter().enumerate() {
             self.kernel.writer(set).storage_buffer(0, &buffer).storage_buffer(1, map).apply(device);
         }
-        self.exact_push = None;
-        self.corners = None;
+        (self.exact_push, self.corners, self.fills) = (None, None, None);
         if let Some(e) = exact.filter(|_| !quads.is_empty()) {
             assert_eq!(e.corner_visibility.len(), quads.len(), "one corner visibility per quad");
+            let width = e.gbuffer.size.width;
+            let fills: Vec<[u32; 2]> = (quads.iter().enumerate())
+                .flat_map(|(k, q)| {
+                    (q.y0..=q.own_y1).flat_map(move |y| (q.x0..=q.own_x1).map(move |x| [y * width + x, k as u32]))
+                })
+                .filter(|&[i, _]| !(e.sensed)(i as usize))
+                .collect();
             let corners = transfer::upload(device, "corner visibilities", e.corner_visibility, usage)?;
+            // (Never an empty buffer: a quad of corners alone fills nothing, and count 0 reads nothing.)
+            let listed: &[[u32; 2]] = if fills.is_empty() { &[[0, 0]] } else { &fills };
+            let fill_list = transfer::upload(device, "pixels to fill", listed, usage)?;
             (self.exact.writer(0))
                 .storage_buffer(0, &buffer)
                 .storage_buffer(1, maps[0])
@@ -101,9 +114,10 @@ impl InterpolatePass {
                 .storage_buffer(6, &e.scene.emitters)
                 .storage_buffer(7, &e.scene.chunks)
                 .storage_buffer(8, &e.scene.groups)
+                .storage_buffer(9, &fill_list)
                 .apply(device);
-            self.exact_push = Some((e.scene.lights.groups.len() as u32, e.bias));
-            self.corners = Some(corners);
+            self.exact_push = Some((e.scene.lights.groups.len() as u32, e.bias, fills.len() as u32));
+            (self.corners, self.fills) = (Some(corners), Some(fill_list));
         }
         self.quads = Some(buffer);
         self.count = quads.len() as u32;
@@ -120,9 +134,10 @@ impl InterpolatePass {
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: self.count };
         // The radiance map's corners are sensed pixels, which neither dispatch writes: no barrier between.
         match self.exact_push {
-            Some((light_groups, bias)) => {
-                let exact = ExactInterpolatePush { width: size.width, count: self.count, groups: light_groups, bias };
-                self.exact.dispatch(enc, 0, &exact, groups);
+            Some((light_groups, bias, fills)) => {
+                let exact = ExactInterpolatePush { width: size.width, count: fills, groups: light_groups, bias };
+                let workgroups = fills.div_ceil(64);
+                self.exact.dispatch(enc, 0, &exact, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
             }
             None => self.kernel.dispatch(enc, 0, &push, groups),
         }

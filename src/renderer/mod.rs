@@ -754,7 +754,9 @@ impl Renderer {
         } else {
             Vec::new()
         };
+        let sensed_pixel = |i: usize| refinement.is_sensed(i);
         let exact_light = exact_interpolation.then(|| interpolate::Exact {
+            sensed: &sensed_pixel,
             corner_visibility: &corner_visibility,
             gbuffer: &targets.gbuffer,
             scene: &self.scene,
