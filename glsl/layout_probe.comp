@@ -27,6 +27,7 @@ layout(std430, set = 0, binding = 18) buffer CacheGrids { GpuCacheGrid cache_gri
 layout(std430, set = 0, binding = 19) buffer CacheSlots { GpuCacheSlot cache_slots[]; };
 layout(std430, set = 0, binding = 20) buffer CacheSplits { GpuCacheSplit cache_splits[]; };
 layout(std430, set = 0, binding = 21) buffer ComposePushes { ComposePush compose_pushes[]; };
+layout(std430, set = 0, binding = 22) buffer ExactInterpolatePushes { ExactInterpolatePush exact_interpolate_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -52,4 +53,5 @@ void main() {
     cache_slots[1] = cache_slots[0];
     cache_splits[1] = cache_splits[0];
     compose_pushes[1] = compose_pushes[0];
+    exact_interpolate_pushes[1] = exact_interpolate_pushes[0];
 }

@@ -145,6 +145,7 @@ void main() {
         radiance[pixels[sensor]] = value;
         indirect[pixels[sensor]] = vec4(partial[0] / PI, STATE_SENSED);
         results[sensor].r = value;
+        results[sensor].rest = vec4(partial[0] / PI, 0.0);
         for (uint g = 0u; g < MAX_GROUPS; g++) {
             results[sensor].visibility[g] = seen[g];
         }

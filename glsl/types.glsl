@@ -69,6 +69,7 @@ const uint MAX_GROUPS = 8u;
 struct GpuSensorResult {
     vec4 r;
     float visibility[MAX_GROUPS];  // -1 where the group sends nothing
+    vec4 rest;                     // R's part from the main layers (all but the groups' exact light)
 };
 
 struct SensorPush {
@@ -144,6 +145,14 @@ struct ComposePush {
 
 // Surface id of pixels where no surface is seen (src/scene/mod.rs NO_SURFACE).
 const uint NO_SURFACE = 0u;
+
+// Interpolation with the emitters' light computed per pixel (src/gpu_types.rs ExactInterpolatePush).
+struct ExactInterpolatePush {
+    uint width;
+    uint count;   // number of pixels to fill
+    uint groups;  // light groups
+    float bias;   // a sensor's lift above its surface, world units
+};
 
 // w of the radiance map: how R was obtained (src/gpu_types.rs radiance_state).
 const float STATE_NONE = 0.0;

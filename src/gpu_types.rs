@@ -135,6 +135,9 @@ pub struct GpuSensorResult {
     /// Visibility of each light group (visible over unoccluded weighted coverage of its zoom view); −1 where
     /// the group sends this sensor nothing.
     pub visibility: [f32; MAX_GROUPS],
+    /// R's part from the main layers (the indirect light, `Kd·ε`, the background: all but the exact
+    /// estimator's `Σ E_g·V_g`); w unused.
+    pub rest: Vec4,
 }
 
 /// Push constants of the sensor-map pass.
@@ -226,6 +229,20 @@ pub struct GpuQuad {
     pub own_x1: u32,
     pub own_y1: u32,
     pub _pad: [u32; 2],
+}
+
+/// Push constants of the interpolation that computes the emitters' light per pixel
+/// (`glsl/interpolate_exact.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ExactInterpolatePush {
+    pub width: u32,
+    /// Number of pixels to fill.
+    pub count: u32,
+    /// Light groups.
+    pub groups: u32,
+    /// A sensor's lift above its surface, world units (`SensorFrame::new`'s `bias`).
+    pub bias: f32,
 }
 
 /// Push constants of the passes that work on whole images (interpolation, filter, composition).

@@ -5,9 +5,9 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 
 use sensorlight::gpu_types::{
-    ComposePush, CullPush, EmitterPush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster,
-    GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor, GpuSensorResult,
-    GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
+    ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
+    GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
+    GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -96,7 +96,7 @@ fn shared_structs_match_glsl() {
         (8, "GpuZoom", rust_layout!(GpuZoom: right, up, forward)),
         (9, "GpuEmitter", rust_layout!(GpuEmitter: v0, v1, v2, ke)),
         (10, "GpuLightGroup", rust_layout!(GpuLightGroup: first_chunk, chunks, _pad)),
-        (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility)),
+        (11, "GpuSensorResult", rust_layout!(GpuSensorResult: r, visibility, rest)),
         (12, "GpuEmitterChunk", rust_layout!(GpuEmitterChunk: first, count, group, _pad)),
         (13, "EmitterPush", rust_layout!(EmitterPush: sensors, chunks, groups, _pad)),
         (
@@ -157,6 +157,7 @@ fn shared_structs_match_glsl() {
         (19, "GpuCacheSlot", rust_layout!(GpuCacheSlot: key, entry, _pad)),
         (20, "GpuCacheSplit", rust_layout!(GpuCacheSplit: plane, children, _pad)),
         (21, "ComposePush", rust_layout!(ComposePush: background, width, height, apart, _pad)),
+        (22, "ExactInterpolatePush", rust_layout!(ExactInterpolatePush: width, count, groups, bias)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

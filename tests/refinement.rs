@@ -4,14 +4,17 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use sensorlight::gbuffer::GBufferData;
+use sensorlight::gpu_scene::GpuScene;
 use sensorlight::gpu_types::GpuQuad;
 use sensorlight::gpu_types::MAX_GROUPS;
 use sensorlight::gpu_types::radiance_state::{INTERPOLATED, SENSED};
-use sensorlight::passes::interpolate::InterpolatePass;
+use sensorlight::light::groups::Lights;
+use sensorlight::passes::gbuffer::GBufferPass;
+use sensorlight::passes::interpolate::{Exact, InterpolatePass};
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
 use sensorlight::sensors::SensorKind;
-use sensorlight::sensors::refine::{Refinement, Visibility, interpolate_cpu};
+use sensorlight::sensors::refine::{Refinement, Visibility, interpolate_cpu, interpolate_exact_cpu};
 use sensorlight::vk::{Access, barrier, transfer};
 
 /// A synthetic G-buffer: every pixel a surface (ids from `id`), all facing +z.
@@ -56,7 +59,7 @@ fn refine_seeing(
         if refinement.is_finished() {
             break;
         }
-        pending = refinement.step(&radiance, &visibility);
+        pending = refinement.step(&radiance, &visibility, &[]);
     }
     let sensed = (0..g.surface.len()).map(|i| refinement.is_sensed(i)).collect();
     (sensed, refinement.interpolated().to_vec())
@@ -172,7 +175,7 @@ fn gpu_interpolation_matches_the_cpu_twin() {
         let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
         let indirect = transfer::upload(device, "indirect", &other, usage).unwrap();
         let mut pass = InterpolatePass::new(device).unwrap();
-        pass.bind(device, &quads, [&radiance, &indirect]).unwrap();
+        pass.bind(device, &quads, [&radiance, &indirect], None).unwrap();
         device
             .submit_and_wait(|enc| {
                 barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
@@ -188,6 +191,72 @@ fn gpu_interpolation_matches_the_cpu_twin() {
             assert_eq!(a.w, b.w, "state of pixel {i}");
             assert!((*a - *b).abs().max_element() <= 1e-6, "pixel {i}: GPU {a}, CPU {b}");
         }
+    }
+}
+
+/// The exact interpolation (each light group's unoccluded light computed per pixel, its visibility and the
+/// rest interpolated) against its CPU twin, on the small-light scene's real G-buffer with arbitrary corner
+/// values: visibilities in [0, 1], some corners not measuring the group (−1), rests of any colour.
+#[test]
+fn gpu_exact_interpolation_matches_the_cpu_twin() {
+    let (w, h) = (40u32, 30u32);
+    let scene = common::small_light((w, h));
+    let size = ImageSize { width: w, height: h };
+    let bias = 2e-4 * scene.mesh.scale();
+    let noise = |i: u32, salt: u64| hash(i as u64 ^ (salt << 40)) as f32 / u64::MAX as f32;
+    let (g, initial, indirect, quads, corners, got) = common::gpu(|device| {
+        let gpu_scene = GpuScene::upload(device, &scene, None, None).unwrap();
+        let gbuffer = GBufferPass::new(device, &gpu_scene)
+            .unwrap()
+            .render(device, &gpu_scene, &scene.camera, size, 1e-3)
+            .unwrap();
+        let g = gbuffer.read_back(device).unwrap();
+        let (mut refinement, mut pending) = Refinement::start(&g, 8, 1e30);
+        let mut sensed = vec![false; (w * h) as usize];
+        while !refinement.is_finished() {
+            pending.iter().for_each(|&i| sensed[i as usize] = true);
+            pending = refinement.step(&vec![Vec4::ONE; (w * h) as usize], &[], &[]);
+        }
+        pending.iter().for_each(|&i| sensed[i as usize] = true);
+        let quads = refinement.interpolated().to_vec();
+        let value = |i: u32, salt| Vec3::new(noise(i, salt), noise(i, salt + 1), noise(i, salt + 2));
+        let at = |i: u32, salt| if sensed[i as usize] { value(i, salt).extend(SENSED) } else { Vec4::ZERO };
+        let initial: Vec<Vec4> = (0..w * h).map(|i| at(i, 1)).collect();
+        let indirect: Vec<Vec4> = (0..w * h).map(|i| at(i, 5)).collect();
+        let visibility = |i: u32| -> Visibility {
+            let v = noise(i, 9);
+            std::array::from_fn(|k| if k == 0 && v > 0.2 { v } else { -1.0 })
+        };
+        let corners: Vec<[Visibility; 4]> = quads
+            .iter()
+            .map(|q| [(q.x0, q.y0), (q.x1, q.y0), (q.x0, q.y1), (q.x1, q.y1)].map(|(x, y)| visibility(y * w + x)))
+            .collect();
+        let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+        let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
+        let indirect_map = transfer::upload(device, "indirect", &indirect, usage).unwrap();
+        let mut pass = InterpolatePass::new(device).unwrap();
+        let is_sensed = |i: usize| sensed[i];
+        let exact =
+            Exact { sensed: &is_sensed, corner_visibility: &corners, gbuffer: &gbuffer, scene: &gpu_scene, bias };
+        pass.bind(device, &quads, [&radiance, &indirect_map], Some(exact)).unwrap();
+        device
+            .submit_and_wait(|enc| {
+                barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
+                pass.record(enc, size);
+                Ok(())
+            })
+            .unwrap();
+        let got = transfer::read_buffer::<Vec4>(device, &radiance, (w * h) as usize).unwrap();
+        (g, initial, indirect, quads, corners, got)
+    });
+    let mut expected = initial.clone();
+    let lights = Lights::new(&scene.mesh);
+    interpolate_exact_cpu((&mut expected, &indirect), &corners, (&g, &lights, bias), &quads);
+    let lit = expected.iter().zip(&initial).filter(|(e, i)| e.w == INTERPOLATED && e.truncate() != i.truncate());
+    assert!(lit.count() > 100, "the quads fill pixels");
+    for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
+        assert_eq!(a.w, b.w, "state of pixel {i}");
+        assert!((*a - *b).abs().max_element() <= 1e-4 * b.max_element().max(1.0), "pixel {i}: GPU {a}, CPU {b}");
     }
 }
 
@@ -226,4 +295,45 @@ fn rendered_boundary_pixels_are_sensed() {
         }
     }
     assert!(out.stats.sensors < (w * h) as u64 / 2, "away from the boundary the grid is interpolated");
+}
+
+/// A floor lit at a grazing angle by a light standing at its edge, nothing occluding: R falls off steeply
+/// and curves between any two sensed pixels, yet with the exact estimator an interpolated pixel is what a
+/// sensor there finds (its light computed per pixel, only the visibility, 1 everywhere, interpolated).
+/// Everything is interpolated from a 16-pixel grid; bilinear interpolation of R over the same quads is more
+/// than 2 % off, the exact interpolation within 0.01 % of every pixel sensed.
+#[test]
+fn an_unoccluded_grazing_light_is_exact_between_sensors() {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let groups = vec![
+        ("floor", 0, common::rect(Vec3::ZERO, x, z, y)),
+        ("light", 1, common::rect(Vec3::new(-1.05, 0.1, 0.0), y * 0.05, z * 0.5, x)),
+    ];
+    let camera = Camera::look_at(Vec3::new(0.0, 2.2, 1.6), Vec3::ZERO, Vec3::Y, 45.0).unwrap();
+    let materials = vec![common::material("grey", 0.5, 0.0), common::material("light", 0.0, 20.0)];
+    let scene = common::scene(groups, materials, camera, (48, 48));
+    let every = common::every_pixel(SensorKind::Hemicube, 16, 0.0);
+    let mut coarse = every;
+    (coarse.frame.tile, coarse.frame.dradiance) = (16, 1e30);
+    let (truth, got) = (common::render(&scene, &every, None), common::render(&scene, &coarse, None));
+    let floor: Vec<usize> = (0..truth.radiance.len()).filter(|&i| got.gbuffer.surface[i] == 1).collect();
+    let interpolated = floor.iter().filter(|&&i| got.radiance[i].w == INTERPOLATED).count();
+    assert!(interpolated > floor.len() * 3 / 4, "{interpolated} of {} floor pixels interpolated", floor.len());
+    let rmse = |image: &[Vec4]| {
+        let sum: f32 = floor.iter().map(|&i| ((image[i].x - truth.radiance[i].x) / truth.radiance[i].x).powi(2)).sum();
+        (sum / floor.len() as f32).sqrt()
+    };
+    // R bilinear over the same quads (the same refinement, judging nothing but ids), from the same corners.
+    let mut bilinear: Vec<Vec4> = got.radiance.iter().map(|r| if r.w == SENSED { *r } else { Vec4::ZERO }).collect();
+    let mut refinement = Refinement::start(&got.gbuffer, 16, 1e30).0;
+    while !refinement.is_finished() {
+        refinement.step(&bilinear, &[], &[]);
+    }
+    interpolate_cpu(&mut bilinear, 48, refinement.interpolated());
+    assert!(
+        rmse(&bilinear) > 0.02,
+        "bilinear R is {:.3} % off: the light does not curve enough",
+        100.0 * rmse(&bilinear)
+    );
+    assert!(rmse(&got.radiance) < 1e-4, "exact interpolation is {:.4} % off", 100.0 * rmse(&got.radiance));
 }

@@ -36,7 +36,7 @@ use crate::params::{EstimatorKind, FrameParams, Param, ParamError, RenderParams}
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
-use crate::passes::interpolate::InterpolatePass;
+use crate::passes::interpolate::{self, InterpolatePass};
 use crate::passes::sensor_maps::{CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene};
@@ -702,6 +702,11 @@ impl Renderer {
         let mut r = vec![Vec4::ZERO; pixels];
         let exact = self.runner.measures_lights();
         let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
+        // With the exact estimator over the hemisphere (a domain the same whatever a sensor's turn), the
+        // interpolation computes each light group's unoccluded light per pixel and interpolates only the
+        // visibilities and the rest of R (`interpolate_exact.comp`), so the refinement judges those.
+        let exact_interpolation = exact && self.config.sensor == SensorKind::Hemicube;
+        let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
         let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
         let mut refine_time = hint_time;
         loop {
@@ -713,6 +718,9 @@ impl Renderer {
                         r[i as usize] = f.r;
                         if exact {
                             visibility[i as usize] = f.visibility;
+                        }
+                        if exact_interpolation {
+                            rest[i as usize] = f.rest;
                         }
                     }
                     progress.done(p.len() as u64);
@@ -730,7 +738,7 @@ impl Renderer {
                 break;
             }
             let t = Instant::now();
-            pending = refinement.step(&r, &visibility);
+            pending = refinement.step(&r, &visibility, &rest);
             refine_time += t.elapsed();
             progress.round(&RoundDone {
                 round: per_round.len() as u32,
@@ -745,7 +753,22 @@ impl Renderer {
         progress.phase(Phase::Post);
         let post_start = Instant::now();
         let (sensed, t) = (&targets.sensed, &targets);
-        self.interpolate.bind(&device, refinement.interpolated(), [&sensed.radiance, &sensed.indirect])?;
+        let quads = refinement.interpolated();
+        let corner_visibility: Vec<[Visibility; 4]> = if exact_interpolation {
+            let at = |x: u32, y: u32| visibility[(y * size.width + x) as usize];
+            quads.iter().map(|q| [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)]).collect()
+        } else {
+            Vec::new()
+        };
+        let sensed_pixel = |i: usize| refinement.is_sensed(i);
+        let exact_light = exact_interpolation.then(|| interpolate::Exact {
+            sensed: &sensed_pixel,
+            corner_visibility: &corner_visibility,
+            gbuffer: &targets.gbuffer,
+            scene: &self.scene,
+            bias: frame::BIAS * self.scale,
+        });
+        self.interpolate.bind(&device, quads, [&sensed.radiance, &sensed.indirect], exact_light)?;
         let (ids, masks) = (&t.gbuffer.surface, &t.light_masks);
         // The indirect part apart: with global illumination and the exact estimator (whose main layers hold
         // only it), where its radius is R's own it is not (R's filter already does it).

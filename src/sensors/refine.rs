@@ -21,10 +21,14 @@ use glam::{Vec3, Vec4};
 
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::{GpuQuad, MAX_GROUPS};
+use crate::light::groups::Lights;
 use crate::scene::{NO_SURFACE, SurfaceId};
 
 /// Corner normals agree when every pair is within this angle.
 pub const NORMAL_TOLERANCE_DEG: f32 = 10.0;
+
+/// Corners see a light group alike when their visibilities of it differ by at most this.
+pub const SAME_VISIBILITY: f32 = 1e-3;
 
 /// The relative variation of R is measured against at least this fraction of the brightest R sensed on
 /// the first grid, so that black regions are not refined to the pixel on noise.
@@ -122,7 +126,12 @@ impl Refinement {
     /// Judges every active quad with the radiance map `r` (all queued sensors done) and, with the exact
     /// estimator, what each sensor saw of each light group (`visibility`, per pixel, else empty); returns the
     /// next sensors to place, empty when the refinement is finished.
-    pub fn step(&mut self, r: &[Vec4], visibility: &[Visibility]) -> Vec<u32> {
+    ///
+    /// `rest`, per pixel (else empty): R's part besides the light groups' exact light, given where the
+    /// interpolation computes that light per pixel (`glsl/interpolate_exact.comp`). Then a quad whose corners
+    /// see every group through the same share is judged by what is interpolated there, the rest (against R,
+    /// as R's own variation is), not by R, whose curvature under a light the interpolation reproduces.
+    pub fn step(&mut self, r: &[Vec4], visibility: &[Visibility], rest: &[Vec4]) -> Vec<u32> {
         let floor = *self.floor.get_or_insert_with(|| {
             let brightest = self
                 .sensed
@@ -136,7 +145,7 @@ impl Refinement {
         let mut next_quads = Vec::new();
         let mut next_sensors = Vec::new();
         for q in std::mem::take(&mut self.active) {
-            if self.can_interpolate(q, r, visibility, floor) {
+            if self.can_interpolate(q, (r, rest), visibility, floor) {
                 self.interpolated.push(self.owned(q));
                 continue;
             }
@@ -160,7 +169,7 @@ impl Refinement {
         next_sensors
     }
 
-    fn can_interpolate(&self, q: Quad, r: &[Vec4], visibility: &[Visibility], floor: f32) -> bool {
+    fn can_interpolate(&self, q: Quad, (r, rest): (&[Vec4], &[Vec4]), visibility: &[Visibility], floor: f32) -> bool {
         let corners = [self.index(q.x0, q.y0), self.index(q.x1, q.y0), self.index(q.x0, q.y1), self.index(q.x1, q.y1)];
         let id = self.surface[corners[0]];
         if id == NO_SURFACE || corners.iter().any(|&c| self.surface[c] != id) {
@@ -174,10 +183,21 @@ impl Refinement {
                 }
             }
         }
-        let values: Vec<Vec3> = corners.iter().map(|&c| r[c].truncate()).collect();
-        let max = values.iter().fold(Vec3::splat(f32::MIN), |m, v| m.max(*v));
-        let min = values.iter().fold(Vec3::splat(f32::MAX), |m, v| m.min(*v));
-        let variation = (max - min).max_element() / max.max_element().max(floor).max(f32::MIN_POSITIVE);
+        let extremes = |values: &[Vec4]| {
+            let (lo, hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            corners.iter().fold((lo, hi), |(lo, hi), &c| (lo.min(values[c].truncate()), hi.max(values[c].truncate())))
+        };
+        // The light groups' light is computed per pixel (`rest` given) and every corner sees each group
+        // through the same share of it: only the rest is interpolated, so only it is judged. Where a
+        // visibility varies (a penumbra), so does R's error from interpolating it, and R is judged.
+        let same_light = |g: usize| {
+            let seen = corners.map(|c| visibility[c][g]);
+            seen.iter().all(|v| (v - seen[0]).abs() <= SAME_VISIBILITY)
+        };
+        let exact_light = !rest.is_empty() && !visibility.is_empty() && (0..MAX_GROUPS).all(same_light);
+        let (lo, hi) = extremes(r);
+        let (lo_judged, hi_judged) = if exact_light { extremes(rest) } else { (lo, hi) };
+        let variation = (hi_judged - lo_judged).max_element() / hi.max_element().max(floor).max(f32::MIN_POSITIVE);
         if variation >= self.dradiance {
             return false;
         }
@@ -262,6 +282,69 @@ pub fn interpolate_cpu(radiance: &mut [Vec4], width: u32, quads: &[GpuQuad]) {
                 let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
                 let r = c00.lerp(c10, fx).lerp(c01.lerp(c11, fx), fy);
                 radiance[i] = r.extend(INTERPOLATED);
+            }
+        }
+    }
+}
+
+/// The CPU twin of `glsl/interpolate_exact.comp`: fills each quad's own pixels that are not sensed with each
+/// light group's unoccluded light computed at the pixel (at a sensor lifted by `bias` along the normal, over
+/// the hemisphere: `light::polygon`, the twin of the shader's formula) times its visibility interpolated from
+/// the corners that measured it, plus the rest (`indirect`, R's part from the main layers) interpolated.
+/// `corner_visibility`: one per quad, corners (x0, y0), (x1, y0), (x0, y1), (x1, y1).
+pub fn interpolate_exact_cpu(
+    (radiance, indirect): (&mut [Vec4], &[Vec4]),
+    corner_visibility: &[[Visibility; 4]],
+    (g, lights, bias): (&GBufferData, &Lights, f32),
+    quads: &[GpuQuad],
+) {
+    use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
+    use crate::light::polygon::{Domain, Receiver, projected_solid_angle};
+    let width = g.size.width;
+    for (q, seen) in quads.iter().zip(corner_visibility) {
+        let at = |x: u32, y: u32| (y * width + x) as usize;
+        let corners = [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)];
+        let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
+        for y in q.y0..=q.own_y1 {
+            for x in q.x0..=q.own_x1 {
+                let i = at(x, y);
+                if radiance[i].w == SENSED {
+                    continue;
+                }
+                let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
+                let weight = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
+                let mix = |map: &[Vec4]| -> Vec3 { (0..4).map(|c| weight[c] * map[corners[c]].truncate()).sum() };
+                let (position, n) = (g.position[i], g.normal[i].truncate());
+                if position.w == 0.0 {
+                    radiance[i] = mix(radiance).extend(INTERPOLATED);
+                    continue;
+                }
+                let origin = (position.truncate() + n * bias).as_dvec3();
+                let receiver = Receiver { origin, t: glam::DVec3::ZERO, b: glam::DVec3::ZERO, n: n.as_dvec3() };
+                let mut direct = Vec3::ZERO;
+                for (group, light) in lights.groups.iter().enumerate() {
+                    let e: Vec3 = (lights.emitters[light.emitters.start as usize..light.emitters.end as usize].iter())
+                        .map(|em| {
+                            let polygon = em.v.map(|v| v.as_dvec3());
+                            em.ke * projected_solid_angle(&receiver, Domain::Hemisphere, &polygon) as f32
+                        })
+                        .sum();
+                    if e.max_element() <= 0.0 {
+                        continue;
+                    }
+                    let known: Vec<(f32, f32)> =
+                        (0..4).filter(|&c| seen[c][group] >= 0.0).map(|c| (weight[c], seen[c][group])).collect();
+                    let weighted: f32 = known.iter().map(|(w, _)| w).sum();
+                    let v = if weighted > 0.0 {
+                        known.iter().map(|(w, v)| w * v).sum::<f32>() / weighted
+                    } else if !known.is_empty() {
+                        known.iter().map(|(_, v)| v).sum::<f32>() / known.len() as f32
+                    } else {
+                        1.0
+                    };
+                    direct += e * v;
+                }
+                radiance[i] = (mix(indirect) + direct / std::f32::consts::PI).extend(INTERPOLATED);
             }
         }
     }
