@@ -734,7 +734,14 @@ impl Renderer {
                 readback_per_round.push(self.runner.times.readback_bytes - read_before);
                 let round = per_round.len() as u32;
                 if progress.wants_snapshot(round) {
-                    progress.snapshot(&Snapshot { round, size, image: preview(&g, &r, &refinement, frame.background) });
+                    let light = exact_interpolation.then(|| PreviewLight {
+                        visibility: &visibility,
+                        rest: &rest,
+                        lights: &self.scene.lights,
+                        bias: frame::BIAS * self.scale,
+                    });
+                    let image = preview(&g, &r, &refinement, frame.background, light);
+                    progress.snapshot(&Snapshot { round, size, image });
                 }
             }
             if refinement.is_finished() {
@@ -824,14 +831,45 @@ impl Renderer {
     }
 }
 
+/// What the exact interpolation's CPU twin needs for a preview: per pixel, the sensed visibilities and R's
+/// rest; the lights and the sensors' lift.
+struct PreviewLight<'a> {
+    visibility: &'a [Visibility],
+    rest: &'a [Vec4],
+    lights: &'a Lights,
+    bias: f32,
+}
+
 /// The image so far on the host, from the R sensed (`r`, where `refinement` sensed) interpolated over every
-/// quad: unfiltered, cheap, and only ever a preview (the render's own image comes from the GPU passes).
-fn preview(g: &GBufferData, r: &[Vec4], refinement: &Refinement, background: glam::Vec3) -> Vec<Vec4> {
+/// quad as the render's interpolation does (with `light`, the exact interpolation's CPU twin): unfiltered,
+/// and only ever a preview (the render's own image comes from the GPU passes).
+fn preview(
+    g: &GBufferData,
+    r: &[Vec4],
+    refinement: &Refinement,
+    background: glam::Vec3,
+    light: Option<PreviewLight<'_>>,
+) -> Vec<Vec4> {
     use crate::gpu_types::radiance_state::SENSED;
-    let mut radiance: Vec<Vec4> = (r.iter().enumerate())
-        .map(|(i, v)| if refinement.is_sensed(i) { v.truncate().extend(SENSED) } else { Vec4::ZERO })
-        .collect();
-    crate::sensors::refine::interpolate_cpu(&mut radiance, g.size.width, &refinement.coverage());
+    let sensed = |v: &[Vec4]| -> Vec<Vec4> {
+        (v.iter().enumerate())
+            .map(|(i, v)| if refinement.is_sensed(i) { v.truncate().extend(SENSED) } else { Vec4::ZERO })
+            .collect()
+    };
+    let mut radiance = sensed(r);
+    let quads = refinement.coverage();
+    match light {
+        Some(l) => {
+            let width = g.size.width;
+            let at = |x: u32, y: u32| l.visibility[(y * width + x) as usize];
+            let corners: Vec<[Visibility; 4]> =
+                quads.iter().map(|q| [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)]).collect();
+            let rest = sensed(l.rest);
+            let twin = crate::sensors::refine::interpolate_exact_cpu;
+            twin((&mut radiance, &rest), &corners, (g, l.lights, l.bias), &quads);
+        }
+        None => crate::sensors::refine::interpolate_cpu(&mut radiance, g.size.width, &quads),
+    }
     (g.surface.iter().zip(&g.emission).zip(&g.albedo).zip(&radiance))
         .map(|(((&id, le), kd), r)| match id {
             crate::scene::NO_SURFACE => background.extend(0.0),
