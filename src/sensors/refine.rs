@@ -273,25 +273,40 @@ fn split(a: u32, b: u32) -> Vec<u32> {
     if b - a > 1 { vec![a, (a + b) / 2, b] } else { vec![a, b] }
 }
 
+/// Fills the pixels quad `q` owns that were not sensed with `value(pixel, bilinear weights of the corners
+/// (x0, y0), (x1, y0), (x0, y1), (x1, y1), R at those corners)`, marked interpolated.
+fn fill_quad(
+    radiance: &mut [Vec4],
+    width: u32,
+    q: &GpuQuad,
+    mut value: impl FnMut(usize, [f32; 4], [Vec3; 4]) -> Vec3,
+) {
+    use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
+    let at = |x: u32, y: u32| (y * width + x) as usize;
+    let corners = [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)].map(|c| radiance[c].truncate());
+    let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
+    for y in q.y0..=q.own_y1 {
+        for x in q.x0..=q.own_x1 {
+            let i = at(x, y);
+            if radiance[i].w == SENSED {
+                continue;
+            }
+            let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
+            let weight = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
+            radiance[i] = value(i, weight, corners).extend(INTERPOLATED);
+        }
+    }
+}
+
+/// Σ weight · value over a quad's corners.
+fn bilinear(weight: [f32; 4], values: [Vec3; 4]) -> Vec3 {
+    (0..4).map(|c| weight[c] * values[c]).sum()
+}
+
 /// The CPU twin of `glsl/interpolate.comp`: fills each quad's own pixels that are not sensed.
 pub fn interpolate_cpu(radiance: &mut [Vec4], width: u32, quads: &[GpuQuad]) {
-    use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
     for q in quads {
-        let at = |x: u32, y: u32| (y * width + x) as usize;
-        let (c00, c10) = (radiance[at(q.x0, q.y0)].truncate(), radiance[at(q.x1, q.y0)].truncate());
-        let (c01, c11) = (radiance[at(q.x0, q.y1)].truncate(), radiance[at(q.x1, q.y1)].truncate());
-        let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
-        for y in q.y0..=q.own_y1 {
-            for x in q.x0..=q.own_x1 {
-                let i = at(x, y);
-                if radiance[i].w == SENSED {
-                    continue;
-                }
-                let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
-                let r = c00.lerp(c10, fx).lerp(c01.lerp(c11, fx), fy);
-                radiance[i] = r.extend(INTERPOLATED);
-            }
-        }
+        fill_quad(radiance, width, q, |_, weight, corners| bilinear(weight, corners));
     }
 }
 
@@ -306,54 +321,42 @@ pub fn interpolate_exact_cpu(
     (g, lights, bias): (&GBufferData, &Lights, f32),
     quads: &[GpuQuad],
 ) {
-    use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
     use crate::light::polygon::{Domain, Receiver, projected_solid_angle};
     let width = g.size.width;
     for (q, seen) in quads.iter().zip(corner_visibility) {
         let at = |x: u32, y: u32| (y * width + x) as usize;
-        let corners = [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)];
-        let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
-        for y in q.y0..=q.own_y1 {
-            for x in q.x0..=q.own_x1 {
-                let i = at(x, y);
-                if radiance[i].w == SENSED {
-                    continue;
-                }
-                let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
-                let weight = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
-                let mix = |map: &[Vec4]| -> Vec3 { (0..4).map(|c| weight[c] * map[corners[c]].truncate()).sum() };
-                let (position, n) = (g.position[i], g.normal[i].truncate());
-                if position.w == 0.0 {
-                    radiance[i] = mix(radiance).extend(INTERPOLATED);
-                    continue;
-                }
-                let origin = (position.truncate() + n * bias).as_dvec3();
-                let receiver = Receiver { origin, t: glam::DVec3::ZERO, b: glam::DVec3::ZERO, n: n.as_dvec3() };
-                let mut direct = Vec3::ZERO;
-                for (group, light) in lights.groups.iter().enumerate() {
-                    let e: Vec3 = (lights.emitters[light.emitters.start as usize..light.emitters.end as usize].iter())
-                        .map(|em| {
-                            let polygon = em.v.map(|v| v.as_dvec3());
-                            em.ke * projected_solid_angle(&receiver, Domain::Hemisphere, &polygon) as f32
-                        })
-                        .sum();
-                    if e.max_element() <= 0.0 {
-                        continue;
-                    }
-                    let known: Vec<(f32, f32)> =
-                        (0..4).filter(|&c| seen[c][group] >= 0.0).map(|c| (weight[c], seen[c][group])).collect();
-                    let weighted: f32 = known.iter().map(|(w, _)| w).sum();
-                    let v = if weighted > 0.0 {
-                        known.iter().map(|(w, v)| w * v).sum::<f32>() / weighted
-                    } else if !known.is_empty() {
-                        known.iter().map(|(_, v)| v).sum::<f32>() / known.len() as f32
-                    } else {
-                        1.0
-                    };
-                    direct += e * v;
-                }
-                radiance[i] = (mix(indirect) + direct / std::f32::consts::PI).extend(INTERPOLATED);
+        let rests = [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)].map(|c| indirect[c].truncate());
+        fill_quad(radiance, width, q, |i, weight, corners| {
+            let (position, n) = (g.position[i], g.normal[i].truncate());
+            if position.w == 0.0 {
+                return bilinear(weight, corners);
             }
-        }
+            let origin = (position.truncate() + n * bias).as_dvec3();
+            let receiver = Receiver { origin, t: glam::DVec3::ZERO, b: glam::DVec3::ZERO, n: n.as_dvec3() };
+            let mut direct = Vec3::ZERO;
+            for (group, light) in lights.groups.iter().enumerate() {
+                let e: Vec3 = (lights.emitters[light.emitters.start as usize..light.emitters.end as usize].iter())
+                    .map(|em| {
+                        let polygon = em.v.map(|v| v.as_dvec3());
+                        em.ke * projected_solid_angle(&receiver, Domain::Hemisphere, &polygon) as f32
+                    })
+                    .sum();
+                if e.max_element() <= 0.0 {
+                    continue;
+                }
+                let known: Vec<(f32, f32)> =
+                    (0..4).filter(|&c| seen[c][group] >= 0.0).map(|c| (weight[c], seen[c][group])).collect();
+                let weighted: f32 = known.iter().map(|(w, _)| w).sum();
+                let v = if weighted > 0.0 {
+                    known.iter().map(|(w, v)| w * v).sum::<f32>() / weighted
+                } else if !known.is_empty() {
+                    known.iter().map(|(_, v)| v).sum::<f32>() / known.len() as f32
+                } else {
+                    1.0
+                };
+                direct += e * v;
+            }
+            bilinear(weight, rests) + direct / std::f32::consts::PI
+        });
     }
 }
