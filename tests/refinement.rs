@@ -152,6 +152,29 @@ fn a_change_in_what_a_light_group_shows_splits_a_quad_even_where_r_is_flat() {
     assert_eq!(unseen.len(), blind.len());
 }
 
+/// The GPU interpolation of `quads` over the radiance map and its indirect part (`maps`), with `exact` if
+/// given; both maps as the pass leaves them.
+fn gpu_interpolate(
+    device: &std::sync::Arc<sensorlight::vk::Device>,
+    size: ImageSize,
+    quads: &[GpuQuad],
+    maps: [&[Vec4]; 2],
+    exact: Option<Exact<'_>>,
+) -> [Vec<Vec4>; 2] {
+    let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+    let buffers = maps.map(|m| transfer::upload(device, "map", m, usage).unwrap());
+    let mut pass = InterpolatePass::new(device).unwrap();
+    pass.bind(device, quads, [&buffers[0], &buffers[1]], exact).unwrap();
+    device
+        .submit_and_wait(|enc| {
+            barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
+            pass.record(enc, size);
+            Ok(())
+        })
+        .unwrap();
+    buffers.map(|b| transfer::read_buffer::<Vec4>(device, &b, (size.width * size.height) as usize).unwrap())
+}
+
 #[test]
 fn gpu_interpolation_matches_the_cpu_twin() {
     let (w, h) = (45u32, 29u32);
@@ -170,22 +193,7 @@ fn gpu_interpolation_matches_the_cpu_twin() {
     interpolate_cpu(&mut expected_other, w, &quads);
     assert!(expected.iter().any(|r| r.w == INTERPOLATED));
     let size = ImageSize { width: w, height: h };
-    let got = common::gpu(|device| {
-        let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-        let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
-        let indirect = transfer::upload(device, "indirect", &other, usage).unwrap();
-        let mut pass = InterpolatePass::new(device).unwrap();
-        pass.bind(device, &quads, [&radiance, &indirect], None).unwrap();
-        device
-            .submit_and_wait(|enc| {
-                barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
-                pass.record(enc, size);
-                Ok(())
-            })
-            .unwrap();
-        let read = |b| transfer::read_buffer::<Vec4>(device, b, (w * h) as usize).unwrap();
-        [read(&radiance), read(&indirect)]
-    });
+    let got = common::gpu(|device| gpu_interpolate(device, size, &quads, [&initial, &other], None));
     for (got, expected) in got.iter().zip([&expected, &expected_other]) {
         for (i, (a, b)) in got.iter().zip(expected).enumerate() {
             assert_eq!(a.w, b.w, "state of pixel {i}");
@@ -231,22 +239,10 @@ fn gpu_exact_interpolation_matches_the_cpu_twin() {
             .iter()
             .map(|q| [(q.x0, q.y0), (q.x1, q.y0), (q.x0, q.y1), (q.x1, q.y1)].map(|(x, y)| visibility(y * w + x)))
             .collect();
-        let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-        let radiance = transfer::upload(device, "radiance", &initial, usage).unwrap();
-        let indirect_map = transfer::upload(device, "indirect", &indirect, usage).unwrap();
-        let mut pass = InterpolatePass::new(device).unwrap();
         let is_sensed = |i: usize| sensed[i];
         let exact =
             Exact { sensed: &is_sensed, corner_visibility: &corners, gbuffer: &gbuffer, scene: &gpu_scene, bias };
-        pass.bind(device, &quads, [&radiance, &indirect_map], Some(exact)).unwrap();
-        device
-            .submit_and_wait(|enc| {
-                barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
-                pass.record(enc, size);
-                Ok(())
-            })
-            .unwrap();
-        let got = transfer::read_buffer::<Vec4>(device, &radiance, (w * h) as usize).unwrap();
+        let [got, _] = gpu_interpolate(device, size, &quads, [&initial, &indirect], Some(exact));
         (g, initial, indirect, quads, corners, got)
     });
     let mut expected = initial.clone();

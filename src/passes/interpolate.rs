@@ -1,8 +1,9 @@
 //! Interpolation pass (paper §III-G, docs/DESIGN.md §3 step 5): fills the quads the refinement accepted from
-//! their sensed corners. Shaders, one workgroup per quad: `glsl/interpolate.comp` (bilinear in R; CPU twin
+//! their sensed corners. Shaders: `glsl/interpolate.comp` (bilinear in R, one workgroup per quad; CPU twin
 //! [`crate::sensors::refine::interpolate_cpu`]) and, with the exact estimator's visibilities,
 //! `glsl/interpolate_exact.comp` (each light group's unoccluded light computed per pixel, only its
-//! visibility and the rest interpolated; CPU twin [`crate::sensors::refine::interpolate_exact_cpu`]).
+//! visibility and the rest interpolated, one invocation per pixel to fill; CPU twin
+//! [`crate::sensors::refine::interpolate_exact_cpu`]).
 
 use std::sync::Arc;
 
@@ -27,8 +28,8 @@ pub struct InterpolatePass {
     corners: Option<Buffer>,
     fills: Option<Buffer>,
     count: u32,
-    /// With [`Exact`]: light groups, the sensors' lift and the pixels to fill.
-    exact_push: Option<(u32, f32, u32)>,
+    /// With [`Exact`]: what its dispatch is given.
+    exact_push: Option<ExactInterpolatePush>,
 }
 
 /// What the exact interpolation reads besides the maps: the corners' measured visibilities, each
@@ -116,7 +117,8 @@ impl InterpolatePass {
                 .storage_buffer(8, &e.scene.groups)
                 .storage_buffer(9, &fill_list)
                 .apply(device);
-            self.exact_push = Some((e.scene.lights.groups.len() as u32, e.bias, fills.len() as u32));
+            let groups = e.scene.lights.groups.len() as u32;
+            self.exact_push = Some(ExactInterpolatePush { width, count: fills.len() as u32, groups, bias: e.bias });
             (self.corners, self.fills) = (Some(corners), Some(fill_list));
         }
         self.quads = Some(buffer);
@@ -133,11 +135,10 @@ impl InterpolatePass {
         let groups = [self.count.min(max_x), self.count.div_ceil(max_x), 1];
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: self.count };
         // The radiance map's corners are sensed pixels, which neither dispatch writes: no barrier between.
-        match self.exact_push {
-            Some((light_groups, bias, fills)) => {
-                let exact = ExactInterpolatePush { width: size.width, count: fills, groups: light_groups, bias };
-                let workgroups = fills.div_ceil(64);
-                self.exact.dispatch(enc, 0, &exact, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
+        match &self.exact_push {
+            Some(exact) => {
+                let workgroups = exact.count.div_ceil(64);
+                self.exact.dispatch(enc, 0, exact, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
             }
             None => self.kernel.dispatch(enc, 0, &push, groups),
         }

@@ -44,7 +44,7 @@ use crate::sensors::SensorKind;
 use crate::sensors::frame;
 use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::layout::SensorLayout;
-use crate::sensors::refine::{Refinement, Visibility};
+use crate::sensors::refine::{self, Refinement, Visibility};
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
 
@@ -709,6 +709,7 @@ impl Renderer {
         // triangles that loop would cost more per pixel than a sensor's emitter pass (docs/ACCURACY.md).
         let few_emitters = self.scene.lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
         let exact_interpolation = exact && self.config.sensor == SensorKind::Hemicube && few_emitters;
+        let bias = frame::BIAS * self.scale;
         let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
         let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
         let mut refine_time = hint_time;
@@ -738,7 +739,7 @@ impl Renderer {
                         visibility: &visibility,
                         rest: &rest,
                         lights: &self.scene.lights,
-                        bias: frame::BIAS * self.scale,
+                        bias,
                     });
                     let image = preview(&g, &r, &refinement, frame.background, light);
                     progress.snapshot(&Snapshot { round, size, image });
@@ -764,19 +765,15 @@ impl Renderer {
         let post_start = Instant::now();
         let (sensed, t) = (&targets.sensed, &targets);
         let quads = refinement.interpolated();
-        let corner_visibility: Vec<[Visibility; 4]> = if exact_interpolation {
-            let at = |x: u32, y: u32| visibility[(y * size.width + x) as usize];
-            quads.iter().map(|q| [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)]).collect()
-        } else {
-            Vec::new()
-        };
+        let corner_visibility =
+            if exact_interpolation { refine::corner_visibility(&visibility, size.width, quads) } else { Vec::new() };
         let sensed_pixel = |i: usize| refinement.is_sensed(i);
         let exact_light = exact_interpolation.then(|| interpolate::Exact {
             sensed: &sensed_pixel,
             corner_visibility: &corner_visibility,
             gbuffer: &targets.gbuffer,
             scene: &self.scene,
-            bias: frame::BIAS * self.scale,
+            bias,
         });
         self.interpolate.bind(&device, quads, [&sensed.radiance, &sensed.indirect], exact_light)?;
         let (ids, masks) = (&t.gbuffer.surface, &t.light_masks);
@@ -860,15 +857,11 @@ fn preview(
     let quads = refinement.coverage();
     match light {
         Some(l) => {
-            let width = g.size.width;
-            let at = |x: u32, y: u32| l.visibility[(y * width + x) as usize];
-            let corners: Vec<[Visibility; 4]> =
-                quads.iter().map(|q| [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)]).collect();
+            let corners = refine::corner_visibility(l.visibility, g.size.width, &quads);
             let rest = sensed(l.rest);
-            let twin = crate::sensors::refine::interpolate_exact_cpu;
-            twin((&mut radiance, &rest), &corners, (g, l.lights, l.bias), &quads);
+            refine::interpolate_exact_cpu((&mut radiance, &rest), &corners, (g, l.lights, l.bias), &quads);
         }
-        None => crate::sensors::refine::interpolate_cpu(&mut radiance, g.size.width, &quads),
+        None => refine::interpolate_cpu(&mut radiance, g.size.width, &quads),
     }
     (g.surface.iter().zip(&g.emission).zip(&g.albedo).zip(&radiance))
         .map(|(((&id, le), kd), r)| match id {

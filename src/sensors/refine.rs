@@ -298,6 +298,31 @@ fn fill_quad(
     }
 }
 
+/// Each quad's corners' visibilities, corners (x0, y0), (x1, y0), (x0, y1), (x1, y1): what the exact
+/// interpolation reads (`visibility` per pixel of an image `width` wide).
+pub fn corner_visibility(visibility: &[Visibility], width: u32, quads: &[GpuQuad]) -> Vec<[Visibility; 4]> {
+    let at = |x: u32, y: u32| visibility[(y * width + x) as usize];
+    quads.iter().map(|q| [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)]).collect()
+}
+
+/// A group's visibility at a pixel of bilinear `weight`s from the corners that measured it (`seen` ≥ 0): their
+/// weighted mean; on an edge whose two corners did not, the others' plain mean; none did: 1 (nothing says it
+/// is hidden, as in the reduction). The shader's rule, `glsl/interpolate_exact.comp`.
+fn measured_visibility(weight: [f32; 4], seen: [f32; 4]) -> f32 {
+    let (mut weighted, mut total, mut plain, mut count) = (0.0, 0.0, 0.0, 0.0);
+    for c in (0..4).filter(|&c| seen[c] >= 0.0) {
+        (weighted, total, plain, count) =
+            (weighted + weight[c] * seen[c], total + weight[c], plain + seen[c], count + 1.0);
+    }
+    if total > 0.0 {
+        weighted / total
+    } else if count > 0.0 {
+        plain / count
+    } else {
+        1.0
+    }
+}
+
 /// Σ weight · value over a quad's corners.
 fn bilinear(weight: [f32; 4], values: [Vec3; 4]) -> Vec3 {
     (0..4).map(|c| weight[c] * values[c]).sum()
@@ -344,17 +369,7 @@ pub fn interpolate_exact_cpu(
                 if e.max_element() <= 0.0 {
                     continue;
                 }
-                let known: Vec<(f32, f32)> =
-                    (0..4).filter(|&c| seen[c][group] >= 0.0).map(|c| (weight[c], seen[c][group])).collect();
-                let weighted: f32 = known.iter().map(|(w, _)| w).sum();
-                let v = if weighted > 0.0 {
-                    known.iter().map(|(w, v)| w * v).sum::<f32>() / weighted
-                } else if !known.is_empty() {
-                    known.iter().map(|(_, v)| v).sum::<f32>() / known.len() as f32
-                } else {
-                    1.0
-                };
-                direct += e * v;
+                direct += e * measured_visibility(weight, seen.map(|corner| corner[group]));
             }
             bilinear(weight, rests) + direct / std::f32::consts::PI
         });
