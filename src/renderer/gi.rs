@@ -11,7 +11,7 @@ use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use super::batch::{BatchRunner, SensedMaps};
-use super::{Phase, Progress, map_buffer};
+use super::{Phase, Progress};
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
 use crate::gi::solve::{Next, Solver};
@@ -136,10 +136,7 @@ pub(super) fn solve(
     let first = first_points(cache);
     let (g, first_g) = (points_as_gbuffer(cache, &first[..n]), points_as_gbuffer(cache, &first));
     // The reductions write R at each sensor's pixel: the first pass has the most.
-    let maps = SensedMaps {
-        radiance: Arc::new(map_buffer(device, "radiance cache R", first_g.size)?),
-        indirect: Arc::new(map_buffer(device, "radiance cache R, its indirect part", first_g.size)?),
-    };
+    let maps = SensedMaps::new(device, first_g.size)?;
     runners.first.bind(&maps)?;
     runners.later.bind(&maps)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
