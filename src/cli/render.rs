@@ -190,7 +190,7 @@ const LIT: f32 = 1e-6;
 /// 0 with a black image and says nothing leaves its user guessing (a camera outside a closed room).
 fn black_image_warning(image: &[glam::Vec4], scene: &Scene, params: &RenderParams, input: &Path) -> Option<String> {
     let light = scene.mesh.brightest_emission().max(params.estimator.background.max_element());
-    if image.iter().any(|p| p.truncate().max_element() > LIT * light && light > 0.0) {
+    if light > 0.0 && image.iter().any(|p| p.truncate().max_element() > LIT * light) {
         return None;
     }
     let c = &scene.camera;
