@@ -29,6 +29,7 @@ layout(std430, set = 0, binding = 6) readonly buffer Emitters { GpuEmitter emitt
 layout(std430, set = 0, binding = 7) readonly buffer Chunks { GpuEmitterChunk chunks[]; };
 layout(std430, set = 0, binding = 8) readonly buffer Groups { GpuLightGroup groups[]; };
 layout(push_constant) uniform Push { ExactInterpolatePush push; };  // count: pixels to fill
+#include "group_light.glsl"
 
 void main() {
     // Workgroups beyond the per-dimension limit spill into y.
@@ -58,22 +59,10 @@ void main() {
         radiance[i] = vec4(bilinear, STATE_INTERPOLATED);  // no surface: nothing to compute
         return;
     }
-    GpuSensor s;
-    s.origin = vec4(position.xyz + n * push.bias, 0.0);
-    s.t = vec4(0.0);  // the hemisphere's domain needs no tangents
-    s.b = vec4(0.0);
-    s.n = vec4(n, 0.0);
+    GpuSensor s = hemisphere_sensor(position.xyz, n, push.bias);
     vec3 direct = vec3(0.0);
     for (uint g = 0u; g < push.groups; g++) {
-        vec3 e = vec3(0.0);
-        GpuLightGroup group = groups[g];
-        for (uint c = group.first_chunk; c < group.first_chunk + group.chunks; c++) {
-            GpuEmitterChunk chunk = chunks[c];
-            for (uint k = chunk.first; k < chunk.first + chunk.count; k++) {
-                GpuEmitter em = emitters[k];
-                e += em.ke.rgb * projected_solid_angle(s, em.v0.xyz, em.v1.xyz, em.v2.xyz);
-            }
-        }
+        vec3 e = group_irradiance(s, g);
         if (max(e.r, max(e.g, e.b)) <= 0.0) {
             continue;
         }

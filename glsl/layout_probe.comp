@@ -28,6 +28,9 @@ layout(std430, set = 0, binding = 19) buffer CacheSlots { GpuCacheSlot cache_slo
 layout(std430, set = 0, binding = 20) buffer CacheSplits { GpuCacheSplit cache_splits[]; };
 layout(std430, set = 0, binding = 21) buffer ComposePushes { ComposePush compose_pushes[]; };
 layout(std430, set = 0, binding = 22) buffer ExactInterpolatePushes { ExactInterpolatePush exact_interpolate_pushes[]; };
+layout(std430, set = 0, binding = 23) buffer SubSamples { GpuSubSample sub_samples[]; };
+layout(std430, set = 0, binding = 24) buffer ResolvePushes { ResolvePush resolve_pushes[]; };
+layout(std430, set = 0, binding = 25) buffer SupersampledPixels { GpuSupersampledPixel supersampled_pixels[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -54,4 +57,7 @@ void main() {
     cache_splits[1] = cache_splits[0];
     compose_pushes[1] = compose_pushes[0];
     exact_interpolate_pushes[1] = exact_interpolate_pushes[0];
+    sub_samples[1] = sub_samples[0];
+    resolve_pushes[1] = resolve_pushes[0];
+    supersampled_pixels[1] = supersampled_pixels[0];
 }

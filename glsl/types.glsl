@@ -154,6 +154,36 @@ struct ExactInterpolatePush {
     float bias;   // a sensor's lift above its surface, world units
 };
 
+// One sub-pixel sample of a supersampled pixel (src/gpu_types.rs GpuSubSample).
+struct GpuSubSample {
+    vec4 position;  // w: 1 on a surface, 0 where the ray leaves the scene
+    vec4 normal;
+    vec4 albedo;
+    uint donor;     // the pixel whose final R the sample takes
+    uint _pad[3];
+    float visibility[MAX_GROUPS];        // at the sample (< 0: not measured)
+    float donor_visibility[MAX_GROUPS];  // at the donor
+};
+
+// A supersampled pixel (src/gpu_types.rs GpuSupersampledPixel).
+struct GpuSupersampledPixel {
+    vec4 emission;  // rgb: the mean radiance its square emits (exact)
+    uint pixel;
+    uint _pad[3];
+};
+
+// The supersampling's resolve (src/gpu_types.rs ResolvePush).
+struct ResolvePush {
+    vec4 background;
+    uint width;
+    uint count;    // supersampled pixels
+    uint samples;  // sub-samples per pixel
+    uint groups;
+    float bias;
+    uint exact;    // 1: the light groups' light computed at each sample
+    uint _pad[2];
+};
+
 // w of the radiance map: how R was obtained (src/gpu_types.rs radiance_state).
 const float STATE_NONE = 0.0;
 const float STATE_SENSED = 1.0;

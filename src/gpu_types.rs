@@ -245,6 +245,56 @@ pub struct ExactInterpolatePush {
     pub bias: f32,
 }
 
+/// One sub-pixel sample of a supersampled pixel (docs/DESIGN.md §11, `glsl/resolve.comp`): what its camera
+/// ray meets, and where its R comes from. Host twin: `supersample::SubSample`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSubSample {
+    /// xyz: where the sample's camera ray meets a surface; w: 1 there, 0 where it leaves the scene.
+    pub position: [f32; 4],
+    /// Unit normal turned towards the camera.
+    pub normal: [f32; 4],
+    pub albedo: [f32; 4],
+    /// The pixel whose final R the sample takes: the nearest on the same surface (`supersample::donor`).
+    pub donor: u32,
+    pub _pad: [u32; 3],
+    /// With the exact light: each group's visibility at the sample, and at the donor (< 0: not measured).
+    pub visibility: [f32; MAX_GROUPS],
+    pub donor_visibility: [f32; MAX_GROUPS],
+}
+
+/// A supersampled pixel (`glsl/resolve.comp`): which, and the light its square emits, computed exactly on
+/// the host (`supersample::emission`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSupersampledPixel {
+    /// rgb: the mean emitted radiance over the square.
+    pub emission: [f32; 4],
+    pub pixel: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Push constants of the supersampling's resolve (`glsl/resolve.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ResolvePush {
+    /// What a sample that leaves the scene sees (rgb).
+    pub background: [f32; 4],
+    pub width: u32,
+    /// Supersampled pixels.
+    pub count: u32,
+    /// Sub-samples per supersampled pixel.
+    pub samples: u32,
+    /// Light groups.
+    pub groups: u32,
+    /// A sensor's lift above its surface, world units.
+    pub bias: f32,
+    /// 1: the light groups' light is computed at each sample (the exact interpolation's rule), 0: R is the
+    /// donor's.
+    pub exact: u32,
+    pub _pad: [u32; 2],
+}
+
 /// Push constants of the passes that work on whole images (interpolation, filter, composition).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -33,6 +33,7 @@ pub mod renderer;
 pub mod scene;
 pub mod sensors;
 pub mod strategy;
+pub mod supersample;
 pub mod vk;
 
 /// SPIR-V of every shader in `glsl/`, compiled by build.rs: `glsl/gbuffer.vert` is `shaders::GBUFFER_VERT`.

@@ -86,6 +86,28 @@ impl fmt::Display for EstimatorKind {
     }
 }
 
+/// What a pixel's value is the mean over (docs/DESIGN.md §11).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Antialiasing {
+    /// The pixel's square, as a camera's sensor and every reference renderer (a box filter): where a pixel
+    /// is not uniform (an edge, a crease, a shadow's edge, a sliver thinner than a pixel) it takes sub-pixel
+    /// samples; the oracle integrates every pixel over its square.
+    #[default]
+    On,
+    /// One sample at the pixel's centre: the paper's image (what `metrics` reproduces), aliased edges.
+    Off,
+}
+
+impl fmt::Display for Antialiasing {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::On => "on",
+            Self::Off => "off",
+        })
+    }
+}
+
 /// How many times light is reflected between surfaces before it reaches a visible point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Bounces {
@@ -205,6 +227,7 @@ pub enum Param {
     CacheSensorSize,
     Exposure,
     Samples,
+    Aa,
 }
 
 impl Param {
@@ -226,6 +249,7 @@ impl Param {
             Self::CacheSensorSize => "--cache-sensor-size",
             Self::Exposure => "--exposure",
             Self::Samples => "--samples",
+            Self::Aa => "--aa",
         }
     }
 
@@ -255,6 +279,7 @@ impl Param {
             Self::CacheSensorSize => "cache_sensor_size",
             Self::Exposure => "exposure",
             Self::Samples => "samples",
+            Self::Aa => "aa",
         }
     }
 }
@@ -311,6 +336,7 @@ pub struct Overrides {
     pub cache_resolution: Option<u32>,
     pub cache_sensor_size: Option<u32>,
     pub exposure: Option<f32>,
+    pub aa: Option<Antialiasing>,
 }
 
 impl Overrides {
@@ -429,13 +455,23 @@ pub struct FrameParams {
     /// sharp shadows; the indirect, smooth but aliased where it comes through a gap a texel wide (a door
     /// ajar), loses its pixel-to-pixel noise. Its own radius where it differs from `filter_radius`.
     pub indirect_filter_radius: u32,
+    /// Whether a pixel is its centre or its square.
+    pub aa: Antialiasing,
 }
 
 impl FrameParams {
-    /// Every pixel sensed and nothing filtered: R exactly as the sensors give it (probes, benchmarks,
-    /// comparisons with the oracle).
+    /// Every pixel sensed at its centre and nothing filtered: R exactly as the sensors give it (probes,
+    /// benchmarks, comparisons with the oracle).
     pub const fn every_pixel(indirect: Indirect, background: Vec3) -> Self {
-        Self { indirect, background, tile: 1, dradiance: 0.0, filter_radius: 0, indirect_filter_radius: 0 }
+        Self {
+            indirect,
+            background,
+            tile: 1,
+            dradiance: 0.0,
+            filter_radius: 0,
+            indirect_filter_radius: 0,
+            aa: Antialiasing::Off,
+        }
     }
 }
 
@@ -463,6 +499,7 @@ pub struct RenderParams {
     pub cache_sensor_size: u32,
     /// Exposure of the PNG preview in stops (the EXR is never scaled).
     pub exposure: f32,
+    pub aa: Antialiasing,
     /// Where each value that was set came from (absent: the default).
     origins: BTreeMap<Param, Origin>,
 }
@@ -525,6 +562,7 @@ impl RenderParams {
         let cache_resolution = resolve!(cache_resolution, Param::CacheResolution, DEFAULT_CACHE_RESOLUTION);
         let cache_sensor_size = resolve!(cache_sensor_size, Param::CacheSensorSize, DEFAULT_CACHE_SENSOR_SIZE);
         let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
+        let aa = resolve!(aa, Param::Aa, Antialiasing::default());
         let sensor = SensorKind::new(shape, fov);
         let params = Self {
             estimator_kind,
@@ -537,6 +575,7 @@ impl RenderParams {
             cache_resolution,
             cache_sensor_size,
             exposure,
+            aa,
             origins,
         };
         if let Some(problem) = sensor.size_problem(sensor_size, u32::MAX) {
@@ -557,6 +596,7 @@ impl RenderParams {
             dradiance: self.dradiance,
             filter_radius: self.filter_radius,
             indirect_filter_radius: self.indirect_filter_radius,
+            aa: self.aa,
         }
     }
 

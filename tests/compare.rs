@@ -1,5 +1,6 @@
-//! `sensorlight compare` as a user meets it: a headline that weighs every lit pixel alike, silhouettes
-//! masked, NaN and size mismatches refused with a non-zero exit, the figures as JSON.
+//! `sensorlight compare` as a user meets it: a headline that weighs every lit pixel alike over the whole
+//! image, the interior with silhouettes masked beside it, NaN and size mismatches refused with a non-zero
+//! exit, the figures as JSON.
 
 mod common;
 
@@ -44,22 +45,32 @@ fn the_headline_is_the_per_pixel_relative_rmse() {
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(run.status.success(), "{}", common::stderr(&run));
     let headline = stdout.lines().next().unwrap();
-    assert!(headline.starts_with("relative RMSE 0.0707 ") && headline.contains("16 lit pixels"), "{stdout}");
+    assert!(
+        headline.starts_with("whole image (nothing masked): relative RMSE 0.0707 ")
+            && headline.contains("16 lit pixels"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("interior: relative RMSE 0.0707 "), "nothing to mask here: {stdout}");
     assert!(stdout.contains("mean absolute relative error 0.0500") && stdout.contains("L2 ratio 0.0010"), "{stdout}");
     assert!(stdout.contains("no surface_id channel"), "{stdout}");
     let figures: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-    assert!((figures["relative_rmse"].as_f64().unwrap() - 0.005f64.sqrt()).abs() < 1e-6, "{figures}");
-    assert_eq!(figures["lit_pixels"], 16);
-    assert_eq!(figures["masked_pixels"], 0);
     assert_eq!(figures["image"], a.to_str().unwrap());
-    for key in ["mean_abs_relative_error", "relative_bias", "l2_ratio", "lit_threshold", "lit_fraction"] {
-        assert!(figures[key].is_number(), "{key} missing: {figures}");
+    assert!(figures["lit_fraction"].is_number(), "{figures}");
+    for part in ["whole", "interior"] {
+        let f = &figures[part];
+        assert!((f["relative_rmse"].as_f64().unwrap() - 0.005f64.sqrt()).abs() < 1e-6, "{part}: {figures}");
+        assert_eq!(f["lit_pixels"], 16);
+        assert_eq!(f["masked_pixels"], 0);
+        for key in ["mean_abs_relative_error", "relative_bias", "l2_ratio", "lit_threshold"] {
+            assert!(f[key].is_number(), "{part}: {key} missing: {figures}");
+        }
     }
 }
 
-/// With a surface_id channel, the row on either side of the edge between the two surfaces is masked: a
-/// 3 × 3 neighbourhood there holds both ids. Both rows are the edge here, so take 8 × 4 with the edge in
-/// the middle: rows 1 and 2 masked (16 pixels), and their large error does not count.
+/// With a surface_id channel, the interior masks the row on either side of the edge between the two
+/// surfaces: a 3 × 3 neighbourhood there holds both ids. Both rows are the edge here, so take 8 × 4 with the
+/// edge in the middle: rows 1 and 2 masked (16 pixels), and their large error does not count there; the
+/// whole image counts it (16 of 32 pixels 200 % off: 1.4142).
 #[test]
 fn silhouettes_are_masked_and_counted() {
     let dir = common::scratch("compare_silhouettes");
@@ -72,7 +83,11 @@ fn silhouettes_are_masked_and_counted() {
     let run = compare(&[&a, &b], &[]);
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(run.status.success(), "{}", common::stderr(&run));
-    assert!(stdout.starts_with("relative RMSE 0.0000 ") && stdout.contains("16 lit pixels of 32"), "{stdout}");
+    assert!(
+        stdout.starts_with("whole image (nothing masked): relative RMSE 1.4142 (per pixel, luminance, over 32 lit"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("interior: relative RMSE 0.0000 ") && stdout.contains("16 lit pixels of 32"), "{stdout}");
     assert!(stdout.contains("16 silhouette pixel(s) masked"), "{stdout}");
 }
 

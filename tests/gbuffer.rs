@@ -4,9 +4,9 @@ mod common;
 
 use glam::Vec4;
 use sensorlight::gbuffer::GBufferData;
+use sensorlight::gbuffer::cast as cpu_gbuffer;
 use sensorlight::gpu_scene::GpuScene;
 use sensorlight::passes::gbuffer::{self, GBufferPass};
-use sensorlight::reference::gbuffer as cpu_gbuffer;
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::{ImageSize, NO_SURFACE, Scene};
 

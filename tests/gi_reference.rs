@@ -25,7 +25,11 @@ fn closed_box(rho: f32) -> Scene {
 }
 
 fn render(scene: &Scene, params: EstimatorParams, samples: u32, seed: u64) -> ReferenceImage {
-    Integrator::new(scene, params, samples, seed).unwrap().render(scene.image, &|_| ())
+    Integrator::new(scene, params, samples, seed).unwrap().render(
+        scene.image,
+        sensorlight::params::Antialiasing::Off,
+        &|_| (),
+    )
 }
 
 /// How an image of constant truth `expected` (grey) agrees with it: the image mean's relative error, the
@@ -37,7 +41,7 @@ struct Against {
 }
 
 fn against(image: &ReferenceImage, expected: f64) -> Against {
-    let noise = image.image_std_error();
+    let noise = image.image_std_error.clone();
     let pixels: Vec<(f64, f64)> = image
         .image
         .iter()
@@ -217,7 +221,7 @@ fn albedo_of_one_and_above_terminates_with_finite_values() {
     for rho in [1.0f32, 2.0] {
         let scene = closed_box(rho);
         let integrator = Integrator::new(&scene, gi(Bounces::Converged), 64, 5).unwrap();
-        let image = integrator.render(size, &|_| ());
+        let image = integrator.render(size, sensorlight::params::Antialiasing::Off, &|_| ());
         assert!(image.image.iter().chain(&image.std_error).all(|v| v.is_finite()), "albedo {rho}");
         assert!(image.image.iter().all(|v| v.x >= LE * 2.0), "albedo {rho}: at least Le and its direct light");
         let per_sample = image.rays as f64 / (64.0 * 64.0);

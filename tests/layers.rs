@@ -22,6 +22,7 @@ const RULES: &[(&str, &[&str])] = &[
     ("params", &["sensors"]),
     ("gi", &["scene", "gpu_types", "params"]),
     // The oracle: CPU only, never a GPU pass.
+    ("supersample", &["scene", "gbuffer", "sensors", "gpu_types", "light"]),
     ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
@@ -48,6 +49,7 @@ const RULES: &[(&str, &[&str])] = &[
             "clusters",
             "gi",
             "cancel",
+            "supersample",
         ],
     ),
     // Users of the renderer.

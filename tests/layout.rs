@@ -7,7 +7,8 @@ use std::mem::offset_of;
 use sensorlight::gpu_types::{
     ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
     GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
-    GpuSensorResult, GpuSensorView, GpuSurface, GpuZoom, ImagePush, ReducePush, SensorPush,
+    GpuSensorResult, GpuSensorView, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuZoom, ImagePush, ReducePush,
+    ResolvePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -158,6 +159,13 @@ fn shared_structs_match_glsl() {
         (20, "GpuCacheSplit", rust_layout!(GpuCacheSplit: plane, children, _pad)),
         (21, "ComposePush", rust_layout!(ComposePush: background, width, height, apart, _pad)),
         (22, "ExactInterpolatePush", rust_layout!(ExactInterpolatePush: width, count, groups, bias)),
+        (
+            23,
+            "GpuSubSample",
+            rust_layout!(GpuSubSample: position, normal, albedo, donor, _pad, visibility, donor_visibility),
+        ),
+        (25, "GpuSupersampledPixel", rust_layout!(GpuSupersampledPixel: emission, pixel, _pad)),
+        (24, "ResolvePush", rust_layout!(ResolvePush: background, width, count, samples, groups, bias, exact, _pad)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -80,7 +80,7 @@ fn no_pixel_of_the_shipped_scenes_is_an_outlier_the_oracle_does_not_share() {
         if candidates.is_empty() {
             continue;
         }
-        let oracle = Integrator::new(&scene, p.estimator, 256, 3).unwrap().render(size, &|_| ());
+        let oracle = Integrator::new(&scene, p.estimator, 256, 3).unwrap().render(size, p.aa, &|_| ());
         let shared = outliers(&oracle.image, &oracle.gbuffer, F / 2.0);
         let unexplained: Vec<_> = candidates.iter().filter(|i| !shared.contains(i)).collect();
         assert!(unexplained.is_empty(), "{file}: outliers the oracle does not share at pixels {unexplained:?}");

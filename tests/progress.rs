@@ -53,6 +53,8 @@ fn progress_sees_every_phase_round_and_snapshot() {
         dradiance: 0.2,
         filter_radius: 0,
         indirect_filter_radius: 0,
+        // The previews are of the pixel centres; the final image's supersampled edges are not previewed.
+        aa: sensorlight::params::Antialiasing::Off,
     };
     let recorder = Recorder::default();
     let output = common::gpu(|device| {

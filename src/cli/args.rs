@@ -113,6 +113,11 @@ pub struct ImageFlags {
     /// Do not write the PNG
     #[arg(long, overrides_with = "png")]
     pub no_png: bool,
+    /// A pixel is the mean over its square (`on`: sub-pixel samples where it is not uniform; the reference
+    /// integrates every pixel's square) or its centre alone (`off`: aliased edges, the paper's image)
+    /// [default: on]
+    #[arg(long, value_enum)]
+    pub aa: Option<sensorlight::params::Antialiasing>,
 }
 
 impl EstimatorFlags {

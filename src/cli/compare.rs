@@ -10,8 +10,9 @@ use sensorlight::output::{atomic, compare::compare_files};
 
 #[derive(Args)]
 #[command(after_help = "The headline is the per-pixel relative RMSE of luminance over the lit pixels of the \
-    reference (luminance above 1 % of its mean), silhouettes masked where a surface_id channel exists. Images \
-    holding NaN or infinite values, or of different sizes, are errors.")]
+    reference (luminance above 1 % of its mean) over the whole image, nothing masked; the second figure is the \
+    interior's: silhouettes masked where a surface_id channel exists, emitters where an emission layer does, \
+    and the background. Images holding NaN or infinite values, or of different sizes, are errors.")]
 pub struct CompareArgs {
     /// The image to judge (EXR).
     image: PathBuf,

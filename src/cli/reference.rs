@@ -42,7 +42,11 @@ pub struct ReferenceArgs {
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
     outputs.check(&[], &[&args.scene])?;
-    let flags = args.bounces.overrides(Overrides { exposure: args.image.exposure, ..args.estimator.overrides() });
+    let flags = args.bounces.overrides(Overrides {
+        exposure: args.image.exposure,
+        aa: args.image.aa,
+        ..args.estimator.overrides()
+    });
     let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height))?;
     outputs.check(&[], &scene.input_paths())?;
     let params = resolved.estimator;
@@ -59,9 +63,13 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         ),
     };
     say!(
-        "reference: {}x{}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
+        "reference: {}x{}, {}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
         size.height,
+        match resolved.aa {
+            sensorlight::params::Antialiasing::On => "each pixel over its square (each sample at its own point)",
+            sensorlight::params::Antialiasing::Off => "each pixel at its centre (--aa off)",
+        },
         params.sensor,
         params.indirect,
         args.samples,
@@ -70,7 +78,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     let bar = super::progress_bar(size.height as u64, "rows");
     let start = Instant::now();
-    let result = integrator.render(size, &|rows| bar.inc(rows));
+    let result = integrator.render(size, resolved.aa, &|rows| bar.inc(rows));
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     if let Some(at) = result.image.iter().position(|v| !v.is_finite()) {
@@ -95,7 +103,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         let exr = ExrImage::new(size.width, size.height).rgba("", &result.image);
         super::gbuffer_aovs(exr, &result.gbuffer, scene.camera.eye)
             .rgb("radiance", &result.radiance)
-            .rgb("std_error", &result.image_std_error())
+            .rgb("std_error", &result.image_std_error)
             .rgb("radiance_std_error", &result.std_error)
             .stage(&mut files, path)?;
     }

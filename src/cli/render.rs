@@ -10,8 +10,8 @@ use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{
-    DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR, DEFAULT_INDIRECT_FILTER_RADIUS,
-    EstimatorKind, MAX_CACHE_RESOLUTION, Overrides, RenderParams,
+    Antialiasing, DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR,
+    DEFAULT_INDIRECT_FILTER_RADIUS, EstimatorKind, MAX_CACHE_RESOLUTION, Overrides, RenderParams,
 };
 use sensorlight::renderer::{CacheConfig, DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
 use sensorlight::scene::Scene;
@@ -57,9 +57,11 @@ pub struct RenderArgs {
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
     cache_sensor_size: Option<u32>,
-    /// Also write AOVs into the EXR (an .exr output only): radiance.* (R), sensor_mask (1 sensed, 0.5
-    /// interpolated), emission.*, surface_id, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world
-    /// space), depth.Z (distance from the eye)
+    /// Also write AOVs into the EXR (an .exr output only): radiance.* (R; a supersampled pixel's, the mean
+    /// over its samples on a surface), sensor_mask (1 sensed, 0.5 interpolated), supersampled (1 where the
+    /// pixel took sub-pixel samples), surface_id (a supersampled pixel's: the one most samples show), and at
+    /// the pixel centre emission.*, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world space),
+    /// depth.Z (distance from the eye)
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
@@ -97,6 +99,7 @@ impl RenderArgs {
             indirect_filter_radius: self.indirect_filter_radius,
             cache_sensor_size: self.cache_sensor_size,
             exposure: self.image.exposure,
+            aa: self.image.aa,
             ..self.estimator.overrides()
         }))
     }
@@ -233,6 +236,17 @@ fn print_stats(s: &RenderStats, wall: Duration) {
         s.strategy,
         s.device
     );
+    match s.aa {
+        Antialiasing::On => sensorlight::errln!(
+            "antialiasing: {} pixel(s) ({:.1} %) not uniform over their square took {} sub-pixel samples each \
+             ({:.2} s on the host; --aa off: pixel centres only)",
+            s.supersampled_pixels,
+            100.0 * s.supersampled_share,
+            sensorlight::supersample::SAMPLES,
+            s.times.host_supersample_seconds
+        ),
+        Antialiasing::Off => sensorlight::errln!("antialiasing off: each pixel is its centre"),
+    }
     if let Some(g) = &s.gi {
         let change = g.last_change.map_or(String::new(), |c| format!(", last change {:.2} %", 100.0 * c));
         let tail = g.ratio.map_or(String::new(), |r| {
@@ -327,7 +341,13 @@ fn write_outputs(
                 w if w == radiance_state::INTERPOLATED => 0.5,
                 _ => 0.0,
             });
-            let with_r = exr.rgb("radiance", &out.radiance).scalar("sensor_mask", mask.collect());
+            let mut supersampled = vec![0.0; out.radiance.len()];
+            for &i in &out.supersampled {
+                supersampled[i as usize] = 1.0;
+            }
+            let with_r = (exr.rgb("radiance", &out.radiance))
+                .scalar("sensor_mask", mask.collect())
+                .scalar("supersampled", supersampled);
             exr = super::gbuffer_aovs(with_r, &out.gbuffer, scene.camera.eye);
         }
         exr.stage(&mut files, path)?;

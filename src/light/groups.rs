@@ -48,6 +48,24 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 impl Lights {
+    /// Each group's unoccluded irradiance `Σ Ke·(projected solid angle)` over the hemisphere of a sensor at
+    /// `origin` facing `n` (what the emitter pass computes per sensor; `glsl/group_light.glsl`, its twin).
+    pub fn unoccluded(&self, origin: Vec3, n: Vec3) -> [Vec3; MAX_GROUPS] {
+        use super::polygon::{Domain, Receiver, projected_solid_angle};
+        let receiver =
+            Receiver { origin: origin.as_dvec3(), t: glam::DVec3::ZERO, b: glam::DVec3::ZERO, n: n.as_dvec3() };
+        let mut e = [Vec3::ZERO; MAX_GROUPS];
+        for (group, light) in self.groups.iter().enumerate() {
+            e[group] = (self.emitters[light.emitters.start as usize..light.emitters.end as usize].iter())
+                .map(|em| {
+                    let polygon = em.v.map(|v| v.as_dvec3());
+                    em.ke * projected_solid_angle(&receiver, Domain::Hemisphere, &polygon) as f32
+                })
+                .sum();
+        }
+        e
+    }
+
     /// The emitters of `mesh` (triangles whose material emits), gathered into groups.
     pub fn new(mesh: &Mesh) -> Self {
         // Emitting surfaces, in id order, with their triangles.

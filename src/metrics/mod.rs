@@ -140,7 +140,12 @@ pub fn run(
 ) -> Result<Vec<Run>> {
     let sensor = config.params.estimator.sensor;
     // The paper's experiment: its ε, whatever model the scene file asks `render` for.
-    let frame = FrameParams { indirect: Indirect::Epsilon(config.epsilon), ..config.params.frame() };
+    // The paper's images: one sample at each pixel's centre.
+    let frame = FrameParams {
+        indirect: Indirect::Epsilon(config.epsilon),
+        aa: crate::params::Antialiasing::Off,
+        ..config.params.frame()
+    };
     let mut results = Vec::new();
     let mut current: Option<(u32, Renderer)> = None;
     for (experiment, rd, size) in config.runs() {

@@ -1,6 +1,10 @@
 //! Image agreement: how far one radiance image is from another (e.g. a render from its CPU reference).
 //!
-//! The headline is the **per-pixel relative RMSE on lit pixels**, on luminance:
+//! Two figures, each with everything below: the **whole image** (the headline: every lit pixel, nothing
+//! masked, edges, emitters and background included, as a person sees it) and the **interior** (silhouettes,
+//! emitters and the background masked as described below: the lighting alone).
+//!
+//! The figure is the **per-pixel relative RMSE on lit pixels**, on luminance:
 //! `sqrt(mean over lit pixels of ((Ya − Yb) / Yb)²)`, `Y = 0.2126 R + 0.7152 G + 0.0722 B` (Rec. 709, the
 //! renderer's linear RGB). Every lit pixel weighs the same, so a dim wall counts as much as the light
 //! source. Luminance rather than each channel: a saturated pixel (a red wall's blue channel) would otherwise
@@ -8,6 +12,7 @@
 //!
 //! - **Lit** means the reference's luminance exceeds [`LIT_FRACTION`] (1 %) of its mean luminance over the
 //!   compared pixels; darker pixels would divide by noise. The threshold is reported.
+//! Masked in the interior figure only:
 //! - **Silhouettes** are masked where either image has a `surface_id` channel: a pixel whose 3 × 3
 //!   neighbourhood holds another id there. Renderers filter pixels differently along an edge, which is not
 //!   what a comparison of lighting should measure. The masked pixels are counted and reported.
@@ -193,8 +198,34 @@ pub fn silhouettes(width: usize, height: usize, ids: &[f32]) -> Vec<bool> {
     mask
 }
 
-/// Compares `a` against the reference `b` (see the module documentation).
+/// Which pixels a figure leaves out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Masking {
+    /// None: the whole image.
+    Nothing,
+    /// Silhouettes, emitters and the lit background (see the module documentation).
+    Interior,
+}
+
+/// Both figures of `a` against the reference `b`: the whole image, and its interior.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Comparison {
+    pub whole: Agreement,
+    pub interior: Agreement,
+}
+
+/// Compares `a` against the reference `b` over the whole image and over its interior.
+pub fn compare(a: &Picture, b: &Picture) -> Result<Comparison> {
+    Ok(Comparison { whole: agreement_with(a, b, Masking::Nothing)?, interior: agreement(a, b)? })
+}
+
+/// Compares `a` against the reference `b` over the interior (see the module documentation).
 pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
+    agreement_with(a, b, Masking::Interior)
+}
+
+/// Compares `a` against the reference `b`, leaving out what `masking` says.
+pub fn agreement_with(a: &Picture, b: &Picture, masking: Masking) -> Result<Agreement> {
     ensure!(
         (a.width, a.height) == (b.width, b.height),
         "{} is {}x{} but {} is {}x{}; only images of one size can be compared",
@@ -211,20 +242,21 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
     }
     let n = a.rgb.len();
     let mut masked = vec![false; n];
-    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten() {
+    let interior = masking == Masking::Interior;
+    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten().filter(|_| interior) {
         for (m, s) in masked.iter_mut().zip(silhouettes(a.width, a.height, ids)) {
             *m |= s;
         }
     }
     let mut emitter_pixels = 0;
-    for i in 0..n {
+    for i in (0..n).filter(|_| interior) {
         if [&a.emitter, &b.emitter].into_iter().flatten().any(|e| e[i]) {
             emitter_pixels += !masked[i] as usize;
             masked[i] = true;
         }
     }
     let mut background_pixels = 0;
-    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten() {
+    for ids in [&a.surface_id, &b.surface_id].into_iter().flatten().filter(|_| interior) {
         for i in 0..n {
             if ids[i] == 0.0 && !masked[i] && luminance(&b.rgb[i]) > 0.0 {
                 background_pixels += 1;
@@ -283,15 +315,51 @@ pub fn agreement(a: &Picture, b: &Picture) -> Result<Agreement> {
         pixels: n,
         lit_pixels: lit,
         masked_pixels: n - unmasked,
-        surface_ids: a.surface_id.is_some() || b.surface_id.is_some(),
+        surface_ids: interior && (a.surface_id.is_some() || b.surface_id.is_some()),
         lit_threshold: threshold,
     })
 }
 
 /// Reads channel group `layer` (`""` for the main R, G, B) of two EXR files and compares them.
-pub fn compare_files(a: &Path, b: &Path, layer: &str) -> Result<Agreement> {
+pub fn compare_files(a: &Path, b: &Path, layer: &str) -> Result<Comparison> {
     let (a, b) = (Picture::read(a, layer)?, Picture::read(b, layer)?);
-    agreement(&a, &b)
+    compare(&a, &b)
+}
+
+impl Comparison {
+    /// The figures as a person reads them: the whole image's headline first, then the interior's.
+    pub fn summary(&self) -> Vec<String> {
+        let whole = self.whole.summary();
+        let mut lines = vec![format!("whole image (nothing masked): {}", whole[0])];
+        lines.extend(whole[1..whole.len() - 1].iter().map(|l| format!("  {l}")));
+        lines.push(format!("interior: {}", self.interior.summary()[0]));
+        lines.extend(self.interior.summary()[1..].iter().map(|l| format!("  {l}")));
+        lines
+    }
+
+    /// The figures as JSON, with the files they compare: `whole` and `interior`, each an [`Agreement`].
+    pub fn to_json(&self, image: &Path, reference: &Path, layer: &str) -> Result<Vec<u8>> {
+        #[derive(serde::Serialize)]
+        struct Report<'a> {
+            image: String,
+            reference: String,
+            layer: &'a str,
+            whole: &'a Agreement,
+            interior: &'a Agreement,
+            lit_fraction: f64,
+        }
+        let report = Report {
+            image: image.display().to_string(),
+            reference: reference.display().to_string(),
+            layer,
+            whole: &self.whole,
+            interior: &self.interior,
+            lit_fraction: LIT_FRACTION,
+        };
+        let mut json = serde_json::to_vec_pretty(&report).context("comparison to JSON")?;
+        json.push(b'\n');
+        Ok(json)
+    }
 }
 
 impl Agreement {
@@ -336,29 +404,6 @@ impl Agreement {
             ),
         ]);
         lines
-    }
-
-    /// The figures as JSON, with the files they compare.
-    pub fn to_json(&self, image: &Path, reference: &Path, layer: &str) -> Result<Vec<u8>> {
-        #[derive(serde::Serialize)]
-        struct Report<'a> {
-            image: String,
-            reference: String,
-            layer: &'a str,
-            #[serde(flatten)]
-            agreement: &'a Agreement,
-            lit_fraction: f64,
-        }
-        let report = Report {
-            image: image.display().to_string(),
-            reference: reference.display().to_string(),
-            layer,
-            agreement: self,
-            lit_fraction: LIT_FRACTION,
-        };
-        let mut json = serde_json::to_vec_pretty(&report).context("comparison to JSON")?;
-        json.push(b'\n');
-        Ok(json)
     }
 }
 

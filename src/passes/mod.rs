@@ -9,6 +9,7 @@ pub mod filter;
 pub mod gbuffer;
 pub mod interpolate;
 pub mod reduce;
+pub mod resolve;
 pub mod sensor_maps;
 
 use ash::vk;

@@ -45,11 +45,11 @@ use anyhow::{Result, ensure};
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::gbuffer;
 use super::lights::{LUMINANCE, Lights};
 use super::sampling::{HashedStream, ScrambledSobol, cosine_hemisphere, hash};
 use crate::gbuffer::GBufferData;
-use crate::params::EstimatorParams;
+use crate::gbuffer::cast as gbuffer;
+use crate::params::{Antialiasing, EstimatorParams};
 use crate::scene::bvh::Bvh;
 use crate::scene::{ImageSize, Ray, Scene};
 use crate::sensors::frame::SensorFrame;
@@ -62,6 +62,8 @@ pub const REPLICATES: u32 = 4;
 const LIGHT_STREAM: u64 = 0x4c49_4748_5453_0000;
 /// Mixed into a replicate's key for its paths' further vertices.
 const PATH_STREAM: u64 = 0x5041_5448_5300_0000;
+/// Mixed into a replicate's key for its samples' points in the pixel's square (`Antialiasing::On`).
+const PIXEL_STREAM: u64 = 0x5049_5845_4c53_0000;
 
 pub struct Integrator<'a> {
     pub(super) scene: &'a Scene,
@@ -95,13 +97,40 @@ pub struct Estimate {
     pub std_error: Vec3,
 }
 
+impl Estimate {
+    /// The mean of independent replicates' means, and its standard error from their spread.
+    fn of_replicates(means: &[Vec3; REPLICATES as usize]) -> Self {
+        let mean = means.iter().sum::<Vec3>() / REPLICATES as f32;
+        let variance = means.iter().map(|m| (*m - mean) * (*m - mean)).sum::<Vec3>() / (REPLICATES - 1) as f32;
+        let std_error = if variance.is_finite() {
+            (variance / REPLICATES as f32).map(f32::sqrt)
+        } else {
+            // Squares past f32's range (light many bounces brighter than a Ke near the loader's limit): in f64.
+            let mean = mean.as_dvec3();
+            let variance =
+                means.iter().map(|m| (m.as_dvec3() - mean).powf(2.0)).sum::<DVec3>() / (REPLICATES - 1) as f64;
+            (variance / REPLICATES as f64).map(f64::sqrt).as_vec3()
+        };
+        Self { mean, std_error }
+    }
+}
+
+/// A replicate's random numbers.
+struct Streams {
+    directions: ScrambledSobol,
+    points: ScrambledSobol,
+    paths: HashedStream,
+}
+
 pub struct ReferenceImage {
     pub gbuffer: GBufferData,
     /// R per pixel (rgb; w = 1 where a surface is seen).
     pub radiance: Vec<Vec4>,
     pub std_error: Vec<Vec4>,
-    /// `Le + Kd·R`.
+    /// `Le + Kd·R` (alpha: 1 where the pixel's centre shows a surface).
     pub image: Vec<Vec4>,
+    /// The standard error of [`ReferenceImage::image`].
+    pub image_std_error: Vec<Vec4>,
     /// Rays cast, primary ones included (light samples that face away or leave the domain cast none).
     pub rays: u64,
 }
@@ -169,41 +198,77 @@ impl<'a> Integrator<'a> {
     fn estimate(&self, p: Vec3, n: Vec3, key: u64) -> (Estimate, u64) {
         let sensor = SensorFrame::new(p, n, self.bias);
         let per_replicate = self.samples / REPLICATES;
-        let bounces = self.params.indirect.bounces();
         let mut means = [Vec3::ZERO; REPLICATES as usize];
         let mut rays = 0;
         for (r, mean) in means.iter_mut().enumerate() {
-            let replicate = hash(self.seed ^ hash(key)) ^ r as u64;
+            let replicate = self.replicate(key, r);
             let directions = ScrambledSobol::new(replicate);
             let points = ScrambledSobol::new(replicate ^ LIGHT_STREAM);
             let paths = HashedStream::new(replicate ^ PATH_STREAM);
-            let mut sum = Vec3::ZERO;
-            for i in 0..per_replicate {
-                let local = cosine_hemisphere(directions.point(i));
-                sum += match bounces {
-                    None => self.direction_sample(&sensor, local, &mut rays),
-                    Some(bounces) => {
-                        self.path_sample(&sensor, local, bounces, |depth| paths.vertex(i, depth), &mut rays)
-                    }
-                };
-                if let Some(lights) = &self.lights {
-                    sum += self.light_sample(&sensor, lights, points.bits(i), self.frustum, &mut rays);
-                }
-            }
+            let streams = Streams { directions, points, paths };
+            let sum: Vec3 = (0..per_replicate).map(|i| self.sample(&sensor, &streams, i, &mut rays)).sum();
             *mean = sum / per_replicate as f32;
         }
-        let mean = means.iter().sum::<Vec3>() / REPLICATES as f32;
-        let variance = means.iter().map(|m| (*m - mean) * (*m - mean)).sum::<Vec3>() / (REPLICATES - 1) as f32;
-        let std_error = if variance.is_finite() {
-            (variance / REPLICATES as f32).map(f32::sqrt)
-        } else {
-            // Squares past f32's range (light many bounces brighter than a Ke near the loader's limit): in f64.
-            let mean = mean.as_dvec3();
-            let variance =
-                means.iter().map(|m| (m.as_dvec3() - mean).powf(2.0)).sum::<DVec3>() / (REPLICATES - 1) as f64;
-            (variance / REPLICATES as f64).map(f64::sqrt).as_vec3()
+        (Estimate::of_replicates(&means), rays)
+    }
+
+    /// Replicate `r`'s scramble for the point of `key`.
+    fn replicate(&self, key: u64, r: usize) -> u64 {
+        hash(self.seed ^ hash(key)) ^ r as u64
+    }
+
+    /// Sample `i` of a replicate's `streams` at the `sensor`: a direction (or the path it starts) and, with
+    /// emitters, a light point.
+    fn sample(&self, sensor: &SensorFrame, streams: &Streams, i: u32, rays: &mut u64) -> Vec3 {
+        let local = cosine_hemisphere(streams.directions.point(i));
+        let mut r = match self.params.indirect.bounces() {
+            None => self.direction_sample(sensor, local, rays),
+            Some(bounces) => self.path_sample(sensor, local, bounces, |depth| streams.paths.vertex(i, depth), rays),
         };
-        (Estimate { mean, std_error }, rays)
+        if let Some(lights) = &self.lights {
+            r += self.light_sample(sensor, lights, streams.points.bits(i), self.frustum, rays);
+        }
+        r
+    }
+
+    /// The pixel `(x, y)` of an image of `size` integrated over its square (a box filter, as a camera's sensor
+    /// and every reference renderer): each sample at its own low-discrepancy point of the square, its camera
+    /// ray's first surface, and there one sample of R; `Le + Kd·R`, or the background where the ray leaves.
+    /// Returns the image's estimate, R's (the mean over the samples that met a surface), and the rays cast.
+    fn pixel_estimate(&self, (x, y): (u32, u32), size: ImageSize, key: u64) -> (Estimate, Estimate, u64) {
+        let per_replicate = self.samples / REPLICATES;
+        let (mut images, mut radiances) = ([Vec3::ZERO; REPLICATES as usize], [Vec3::ZERO; REPLICATES as usize]);
+        let mut rays = 0;
+        for r in 0..REPLICATES as usize {
+            let replicate = self.replicate(key, r);
+            let streams = Streams {
+                directions: ScrambledSobol::new(replicate),
+                points: ScrambledSobol::new(replicate ^ LIGHT_STREAM),
+                paths: HashedStream::new(replicate ^ PATH_STREAM),
+            };
+            let square = ScrambledSobol::new(replicate ^ PIXEL_STREAM);
+            // Sample i's point of the square is the net's point order[i]: with the same index, two scrambles
+            // of one Sobol net are correlated (which samples meet a surface would bias their directions).
+            let order = shuffled(per_replicate, replicate ^ PIXEL_STREAM);
+            let (mut image, mut radiance, mut hits) = (Vec3::ZERO, Vec3::ZERO, 0);
+            for i in 0..per_replicate {
+                let u = square.point(order[i as usize]);
+                let ray = self.scene.camera.ray(x as f32 + u.x, y as f32 + u.y, size.width, size.height);
+                rays += 1;
+                let Some(v) = gbuffer::first_surface(self.scene, &self.bvh, &ray) else {
+                    image += self.params.background;
+                    continue;
+                };
+                let sensor = SensorFrame::new(v.position.truncate(), v.normal.truncate(), self.bias);
+                let r = self.sample(&sensor, &streams, i, &mut rays);
+                image += v.emission.truncate() + v.albedo.truncate() * r;
+                radiance += r;
+                hits += 1;
+            }
+            images[r] = image / per_replicate as f32;
+            radiances[r] = radiance / hits.max(1) as f32;
+        }
+        (Estimate::of_replicates(&images), Estimate::of_replicates(&radiances), rays)
     }
 
     /// One cosine-distributed direction (`local`, in the sensor frame): `Ck / (cosθ/π) · cosθ/π`, the emitted
@@ -261,31 +326,64 @@ impl<'a> Integrator<'a> {
         ke * (p_cosine / p_light * power_heuristic(p_light, p_cosine)) as f32
     }
 
-    /// The reference image at `size`: visible points by ray casting, `R` at each, `Le + Kd·R`.
+    /// The reference image at `size`, `aa` choosing each pixel's footprint: `Off`, the point its centre's ray
+    /// sees (by ray casting, [`gbuffer::cast`]), `R` there, `Le + Kd·R`; `On`, the pixel's square
+    /// ([`Self::pixel_estimate`]). The G-buffer is the centres' either way (the AOVs, the masks of `compare`).
     /// `progress` is called with the number of rows finished, from worker threads.
-    pub fn render(&self, size: ImageSize, progress: &(dyn Fn(u64) + Sync)) -> ReferenceImage {
+    pub fn render(&self, size: ImageSize, aa: Antialiasing, progress: &(dyn Fn(u64) + Sync)) -> ReferenceImage {
         let g = gbuffer::cast(self.scene, &self.bvh, size);
         let width = size.width as usize;
-        let estimates: Vec<Option<(Estimate, u64)>> = (0..size.height as usize)
+        // Per pixel: (image, R) estimates and rays; `None` where a centre sample shows no surface.
+        let estimates: Vec<Option<(Estimate, Estimate, u64)>> = (0..size.height as usize)
             .into_par_iter()
             .flat_map_iter(|y| {
                 let row: Vec<_> = (y * width..(y + 1) * width)
-                    .map(|i| {
-                        let (p, n) = (g.position[i], g.normal[i]);
-                        (p.w > 0.0).then(|| self.estimate(p.truncate(), n.truncate(), i as u64))
+                    .map(|i| match aa {
+                        Antialiasing::On => Some(self.pixel_estimate(((i % width) as u32, y as u32), size, i as u64)),
+                        Antialiasing::Off => {
+                            let (p, n) = (g.position[i], g.normal[i]);
+                            (p.w > 0.0).then(|| {
+                                let (r, rays) = self.estimate(p.truncate(), n.truncate(), i as u64);
+                                let (le, kd) = (g.emission[i].truncate(), g.albedo[i].truncate());
+                                let image = Estimate { mean: le + kd * r.mean, std_error: kd * r.std_error };
+                                (image, r, rays + 1)
+                            })
+                        }
                     })
                     .collect();
                 progress(1);
                 row
             })
             .collect();
-        let secondary: u64 = estimates.iter().flatten().map(|(_, rays)| rays).sum();
-        let radiance: Vec<Vec4> = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |(e, _)| e.mean.extend(1.0))).collect();
-        let std_error = estimates.iter().map(|e| e.map_or(Vec4::ZERO, |(e, _)| e.std_error.extend(1.0))).collect();
-        let image = super::post::compose(&g, &radiance, self.params.background);
-        let rays = g.position.len() as u64 + secondary;
-        ReferenceImage { gbuffer: g, radiance, std_error, image, rays }
+        // Alpha: 1 where the pixel's centre shows a surface (as the GPU G-buffer's coverage).
+        let field = |f: &dyn Fn(&(Estimate, Estimate, u64)) -> Vec3, on_background: Vec3| -> Vec<Vec4> {
+            (estimates.iter().zip(&g.surface))
+                .map(|(e, &id)| {
+                    let alpha = if id == crate::scene::NO_SURFACE { 0.0 } else { 1.0 };
+                    e.as_ref().map_or(on_background, f).extend(alpha)
+                })
+                .collect()
+        };
+        ReferenceImage {
+            image: field(&|e| e.0.mean, self.params.background),
+            image_std_error: field(&|e| e.0.std_error, Vec3::ZERO),
+            radiance: field(&|e| e.1.mean, Vec3::ZERO),
+            std_error: field(&|e| e.1.std_error, Vec3::ZERO),
+            rays: g.position.len() as u64 * (aa == Antialiasing::Off) as u64
+                + estimates.iter().flatten().map(|e| e.2).sum::<u64>(),
+            gbuffer: g,
+        }
     }
+}
+
+/// A permutation of `0..n` drawn from `key` (Fisher–Yates on a hashed stream).
+fn shuffled(n: u32, key: u64) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..n).collect();
+    for i in (1..n as usize).rev() {
+        let j = (hash(key ^ hash(i as u64)) % (i as u64 + 1)) as usize;
+        order.swap(i, j);
+    }
+    order
 }
 
 /// Whether the direction `local` (sensor frame) lies in the domain: above the horizon and, for a frustum of
@@ -302,15 +400,6 @@ pub(super) fn power_heuristic(own: f64, other: f64) -> f64 {
 }
 
 impl ReferenceImage {
-    /// The standard error of [`ReferenceImage::image`]: `Kd` times R's (`Le` is exact).
-    pub fn image_std_error(&self) -> Vec<Vec4> {
-        self.std_error
-            .iter()
-            .zip(&self.gbuffer.albedo)
-            .map(|(e, kd)| (e.truncate() * kd.truncate()).extend(1.0))
-            .collect()
-    }
-
     /// Mean relative standard error of `R` over the pixels where `R` is not negligible (luminance-weighted).
     pub fn relative_noise(&self) -> f32 {
         let lum = |v: Vec4| v.truncate().dot(LUMINANCE);

@@ -10,6 +10,7 @@
 mod batch;
 mod gi;
 mod probe;
+mod resolve;
 mod stats;
 
 use std::sync::Arc;
@@ -32,11 +33,12 @@ use crate::gi::RadianceCache;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
 use crate::light::groups::Lights;
-use crate::params::{EstimatorKind, FrameParams, Param, ParamError, RenderParams};
+use crate::params::{Antialiasing, EstimatorKind, FrameParams, Param, ParamError, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::{self, InterpolatePass};
+use crate::passes::resolve::ResolvePass;
 use crate::passes::sensor_maps::{CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene};
@@ -46,6 +48,7 @@ use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::layout::SensorLayout;
 use crate::sensors::refine::{self, Refinement, Visibility};
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
+use crate::supersample;
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
 
 /// The steps of a render (docs/DESIGN.md §3), for progress displays.
@@ -408,12 +411,16 @@ fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
 pub struct Renderer {
     // Field order is drop order: the runner waits for its batches first.
     runner: BatchRunner,
-    /// The scene's triangles and points on its lights, for the refinement's light hints (the exact
-    /// estimator with lights; else `None`).
-    hints: Option<(Bvh, Vec<LightPoint>)>,
+    /// The scene on the host and its triangles' BVH: the supersampling casts its samples' camera rays
+    /// there, the light hints their shadow rays.
+    host: Scene,
+    bvh: Bvh,
+    /// Points on the lights for the refinement's light hints (the exact estimator with lights; else `None`).
+    light_points: Option<Vec<LightPoint>>,
     interpolate: InterpolatePass,
     filter: FilterPass,
     compose: ComposePass,
+    resolve: ResolvePass,
     gbuffer: GBufferPass,
     scene: GpuScene,
     /// The radiance cache's points and table, and the runner of its later bounces (with `config.cache`).
@@ -436,9 +443,14 @@ pub struct RenderOutput {
     pub size: ImageSize,
     /// `Le + albedo·R`.
     pub image: Vec<Vec4>,
-    /// R after interpolation and filtering; w says how it was obtained (see `gpu_types::radiance_state`).
+    /// R after interpolation and filtering (a supersampled pixel's: the mean over its samples on a surface);
+    /// w says how it was obtained (see `gpu_types::radiance_state`).
     pub radiance: Vec<Vec4>,
+    /// The G-buffer at the pixel centres, but for the surface id of a supersampled pixel: the one most of
+    /// its samples show.
     pub gbuffer: GBufferData,
+    /// The pixels that were supersampled (`--aa on`), in increasing index.
+    pub supersampled: Vec<u32>,
     pub stats: RenderStats,
 }
 
@@ -487,10 +499,8 @@ impl Renderer {
         let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
         // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
         // cache's pieces are halved.
-        let hints = (layout.groups > 0).then(|| {
-            let lights = Lights::new(&scene.mesh);
-            (Bvh::build(&scene.mesh.triangles), hints::light_points(&lights))
-        });
+        let bvh = Bvh::build(&scene.mesh.triangles);
+        let light_points = (layout.groups > 0).then(|| hints::light_points(&Lights::new(&scene.mesh)));
         if let Some(c) = config.cache {
             check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;
         }
@@ -498,9 +508,9 @@ impl Renderer {
             let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
             let threshold = crate::gi::entries::LIGHT_VARIATION;
             let varies = |points: &[Vec3], n: Vec3| {
-                let Some((bvh, lights)) = &hints else { return false };
+                let Some(lights) = &light_points else { return false };
                 [n, -n].iter().any(|&n| {
-                    let seen = points.iter().map(|&p| hints::mask(bvh, lights, (p, n), bias, near).count_ones());
+                    let seen = points.iter().map(|&p| hints::mask(&bvh, lights, (p, n), bias, near).count_ones());
                     let (lo, hi) = seen.fold((u32::MAX, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
                     (hi - lo) as f32 > threshold * lights.len() as f32
                 })
@@ -528,11 +538,14 @@ impl Renderer {
         };
         let desc = StrategyDesc { layout, fronts: fronts(config.estimator), rd: config.sensor_size, budget };
         Ok(Self {
-            hints,
+            host: scene.clone(),
+            bvh,
+            light_points,
             runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
             compose: ComposePass::new(device)?,
+            resolve: ResolvePass::new(device)?,
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
             scene: gpu_scene,
             cache,
@@ -689,16 +702,27 @@ impl Renderer {
         let ck = self.ck(frame);
         let (refinement, mut pending) = Refinement::start(&g, frame.tile, frame.dradiance);
         let t = Instant::now();
-        let mut refinement = match &self.hints {
-            Some((bvh, points)) => {
-                let (bias, near) = (frame::BIAS * self.scale, frame::NEAR * self.scale);
-                let masks = hints::hints(bvh, points, &g, bias, near);
-                transfer::write_buffer(&device, &targets.light_masks, &masks)?;
-                refinement.with_hints(masks)
+        let (bias, near) = (frame::BIAS * self.scale, frame::NEAR * self.scale);
+        let masks = self.light_points.as_ref().map(|points| hints::hints(&self.bvh, points, &g, bias, near));
+        if let Some(masks) = &masks {
+            transfer::write_buffer(&device, &targets.light_masks, masks)?;
+        }
+        let hint_time = t.elapsed();
+        // Which pixels take sub-pixel samples, and what the samples see (docs/DESIGN.md §11).
+        let t = Instant::now();
+        let bits = self.light_points.as_ref().map(|_| hints::group_bits(&self.scene.lights)).unwrap_or_default();
+        let plan = match frame.aa {
+            Antialiasing::On => {
+                let flags = supersample::detect(&self.host, &g, masks.as_deref().unwrap_or(&[]), &bits);
+                supersample::plan(&self.host, &self.bvh, &g, &flags)
             }
+            Antialiasing::Off => supersample::Plan::default(),
+        };
+        let mut supersample_time = t.elapsed();
+        let mut refinement = match masks {
+            Some(masks) => refinement.with_hints(masks),
             None => refinement,
         };
-        let hint_time = t.elapsed();
         let mut r = vec![Vec4::ZERO; pixels];
         let exact = self.runner.measures_lights();
         let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
@@ -709,7 +733,6 @@ impl Renderer {
         // triangles that loop would cost more per pixel than a sensor's emitter pass (docs/ACCURACY.md).
         let few_emitters = self.scene.lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
         let exact_interpolation = exact && self.config.sensor == SensorKind::Hemicube && few_emitters;
-        let bias = frame::BIAS * self.scale;
         let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
         let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
         let mut refine_time = hint_time;
@@ -803,12 +826,30 @@ impl Renderer {
             self.compose.record(enc, size, apart, frame.background);
             Ok(())
         })?;
+        // The supersampled pixels, a slice at a time: their samples' R from their donors, the mean over each.
+        let start_samples = Instant::now();
+        let everywhere = (exact_interpolation && !plan.pixels.is_empty()).then(|| {
+            refine::visibility_everywhere(&visibility, size.width, refinement.interpolated(), |i| {
+                refinement.is_sensed(i)
+            })
+        });
+        let light = everywhere.as_deref().map(|v| (v, refinement.hints(), bits.as_slice()));
+        let (resolved, majority) =
+            self.resolve_supersampled(&plan, (&g, &targets), light, (bias, near), frame.background)?;
+        supersample_time += start_samples.elapsed();
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
-        let radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
+        let mut radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
+        // The AOVs of a supersampled pixel: R over its samples on a surface, the id most of them show.
+        let mut g = g;
+        for ((&i, r), id) in plan.pixels.iter().zip(&resolved).zip(majority) {
+            let i = i as usize;
+            radiance[i] = r.truncate().extend(radiance[i].w);
+            g.surface[i] = id;
+        }
         let post_time = post_start.elapsed();
         check_finite(&image, size.width as usize, &device.adapter.driver)?;
 
-        let phases = (gbuffer_time, sensing_time, post_time, refine_time);
+        let phases = (gbuffer_time, sensing_time, post_time, refine_time, supersample_time);
         let times = RenderTimes::new(phases, &self.runner.times, gi.as_ref());
         let stats = RenderStats::new(
             &self.device,
@@ -819,12 +860,14 @@ impl Renderer {
                 sensors_per_round: per_round,
                 readback_bytes_per_round: readback_per_round,
                 interpolated_quads: refinement.interpolated().len() as u64,
+                supersampled_pixels: plan.pixels.len() as u64,
                 gi,
             },
             start.elapsed(),
             times,
         );
-        Ok(RenderOutput { size, image, radiance, gbuffer: g, stats })
+        let supersampled = plan.pixels;
+        Ok(RenderOutput { size, image, radiance, gbuffer: g, supersampled, stats })
     }
 }
 

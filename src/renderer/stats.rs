@@ -31,6 +31,11 @@ pub struct RenderStats {
     /// Bytes read back to the host after each round: the R of the sensors it placed.
     pub readback_bytes_per_round: Vec<u64>,
     pub interpolated_quads: u64,
+    /// Whether pixels are their square (`on`) or their centre.
+    pub aa: crate::params::Antialiasing,
+    /// Pixels given sub-pixel samples (docs/DESIGN.md §11), and their share of the image.
+    pub supersampled_pixels: u64,
+    pub supersampled_share: f64,
     /// Global illumination: the radiance cache's bounces (its sensors are not in `sensors`).
     pub gi: Option<super::GiStats>,
     pub batch_size: u32,
@@ -71,6 +76,9 @@ pub struct RenderTimes {
     pub host_wait_seconds: f64,
     /// Host, within sensing: the refinement's decisions between rounds, and its light hints.
     pub host_refine_seconds: f64,
+    /// Host: finding the pixels to supersample and casting their samples (before sensing), their donors
+    /// and visibilities (after).
+    pub host_supersample_seconds: f64,
     /// Device, by timestamp queries: the culling pass (absent where nothing is culled), the sensor maps and
     /// the reduction (absent without timestamps; on CPU drivers clears may escape them).
     pub gpu_cull_seconds: Option<f64>,
@@ -80,7 +88,7 @@ pub struct RenderTimes {
 
 impl RenderTimes {
     pub(super) fn new(
-        (gbuffer, sensing, post, refine): (Duration, Duration, Duration, Duration),
+        (gbuffer, sensing, post, refine, supersample): (Duration, Duration, Duration, Duration, Duration),
         batches: &BatchTimes,
         gi: Option<&super::GiStats>,
     ) -> Self {
@@ -94,6 +102,7 @@ impl RenderTimes {
             host_record_seconds: batches.host_record.as_secs_f64(),
             host_wait_seconds: batches.host_wait.as_secs_f64(),
             host_refine_seconds: refine.as_secs_f64(),
+            host_supersample_seconds: supersample.as_secs_f64(),
             gpu_cull_seconds: batches.gpu_cull.map(|d| d.as_secs_f64()),
             gpu_maps_seconds: batches.gpu_maps.map(|d| d.as_secs_f64()),
             gpu_reduction_seconds: batches.gpu_reduction.map(|d| d.as_secs_f64()),
@@ -106,6 +115,7 @@ pub(super) struct Counts {
     pub sensors_per_round: Vec<u64>,
     pub readback_bytes_per_round: Vec<u64>,
     pub interpolated_quads: u64,
+    pub supersampled_pixels: u64,
     pub gi: Option<super::GiStats>,
 }
 
@@ -138,6 +148,9 @@ impl RenderStats {
             sensors_per_round: counts.sensors_per_round,
             readback_bytes_per_round: counts.readback_bytes_per_round,
             interpolated_quads: counts.interpolated_quads,
+            aa: frame.aa,
+            supersampled_pixels: counts.supersampled_pixels,
+            supersampled_share: counts.supersampled_pixels as f64 / (size.width as f64 * size.height as f64),
             gi: counts.gi,
             batch_size: renderer.batch_size(),
             batches: renderer.runner.times.batches,

@@ -39,6 +39,20 @@ impl Camera {
         Ray::new(self.eye, (self.forward + self.right * sx + self.up * sy).normalize())
     }
 
+    /// Where the point `p` appears in an image of `width` × `height`, in continuous pixel coordinates (the
+    /// inverse of [`Camera::ray`]); `None` behind the camera or at its eye.
+    pub fn project(&self, p: Vec3, width: u32, height: u32) -> Option<glam::Vec2> {
+        let d = p - self.eye;
+        let z = d.dot(self.forward);
+        if z <= 0.0 || !z.is_finite() {
+            return None;
+        }
+        let tan = (self.vfov * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        let (sx, sy) = (d.dot(self.right) / (z * tan * aspect), d.dot(self.up) / (z * tan));
+        Some(glam::Vec2::new((sx + 1.0) * 0.5 * width as f32, (1.0 - sy) * 0.5 * height as f32))
+    }
+
     /// World → Vulkan clip space matching [`Camera::ray`]: reversed-Z with an infinite far plane (depth 1 at
     /// `near`, → 0 at infinity; compare with GREATER), NDC y down so that row 0 is the top.
     pub fn view_proj(&self, width: u32, height: u32, near: f32) -> Mat4 {

@@ -31,23 +31,44 @@ pub struct LightPoint {
 /// spread over the group's emitters in proportion to their area: a stratified choice of triangle, then a
 /// low-discrepancy point on it. Deterministic.
 pub fn light_points(lights: &Lights) -> Vec<LightPoint> {
-    let per_group = (MAX_POINTS / lights.groups.len().max(1)).min(POINTS_PER_GROUP);
     let mut points = Vec::new();
-    for group in &lights.groups {
+    for (group, n) in lights.groups.iter().zip(point_groups(lights)) {
         let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
         let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
         let total: f32 = areas.iter().sum();
-        if total <= 0.0 {
-            continue;
-        }
-        for k in 0..per_group {
-            let (i, u, v) = stratified_point(&areas, total, k, per_group);
+        for k in 0..n {
+            let (i, u, v) = stratified_point(&areas, total, k, n);
             let e = &emitters[i];
             let normal = (e.v[1] - e.v[0]).cross(e.v[2] - e.v[0]).normalize_or_zero();
             points.push(LightPoint { position: e.v[0] + (e.v[1] - e.v[0]) * u + (e.v[2] - e.v[0]) * v, normal });
         }
     }
     points
+}
+
+fn points_per_group(lights: &Lights) -> usize {
+    (MAX_POINTS / lights.groups.len().max(1)).min(POINTS_PER_GROUP)
+}
+
+/// How many of [`light_points`] each light group has, in order (0 for a group of no area).
+fn point_groups(lights: &Lights) -> Vec<usize> {
+    let area = |g: &crate::light::groups::LightGroup| -> f32 {
+        lights.emitters[g.emitters.start as usize..g.emitters.end as usize].iter().map(|e| triangle_area(&e.v)).sum()
+    };
+    lights.groups.iter().map(|g| if area(g) > 0.0 { points_per_group(lights) } else { 0 }).collect()
+}
+
+/// Each light group's bits in a hint mask (its points of [`light_points`]).
+pub fn group_bits(lights: &Lights) -> Vec<u64> {
+    let mut first = 0;
+    point_groups(lights)
+        .into_iter()
+        .map(|n| {
+            let bits = if n == 0 { 0 } else { (u64::MAX >> (64 - n)) << first };
+            first += n;
+            bits
+        })
+        .collect()
 }
 
 /// Per pixel of `g`, bit k set where the sensor there (at `p + n·bias`, seeing from `near` on) sees point k
@@ -67,20 +88,40 @@ pub fn hints(bvh: &Bvh, points: &[LightPoint], g: &GBufferData, bias: f32, near:
 /// Bit k set where a sensor on the surface at `p` facing `n` (at `p + n·bias`, seeing from `near` on) sees
 /// point k of `points`: [`hints`] for one point.
 pub fn mask(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, near: f32) -> u64 {
+    masks(bvh, points, (p, n), bias, near).1
+}
+
+/// [`mask`], and before it the points a sensor there could see: above its horizon, on the emitter's front,
+/// beyond `near` (whether or not something hides them).
+pub fn masks(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, near: f32) -> (u64, u64) {
     let origin = p + n * bias;
-    let mut mask = 0u64;
+    let (mut facing, mut mask) = (0u64, 0u64);
     for (k, q) in points.iter().enumerate().take(MAX_POINTS) {
         let d = q.position - origin;
         let length = d.length();
         if d.dot(n) <= 0.0 || q.normal.dot(-d) <= 0.0 || length <= near {
             continue;
         }
+        facing |= 1 << k;
         // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
         if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
             mask |= 1 << k;
         }
     }
-    mask
+    (facing, mask)
+}
+
+/// Per light group (`bits`: [`group_bits`]), the share of its points that `visible` holds of those `facing`
+/// holds, or of all its points where `facing` is `None`; −1 where none is counted.
+pub fn shares(bits: &[u64], facing: Option<u64>, visible: u64) -> [f32; crate::gpu_types::MAX_GROUPS] {
+    let mut out = [-1.0; crate::gpu_types::MAX_GROUPS];
+    for (share, &b) in out.iter_mut().zip(bits) {
+        let counted = b & facing.unwrap_or(u64::MAX);
+        if counted != 0 {
+            *share = (visible & counted).count_ones() as f32 / counted.count_ones() as f32;
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -262,6 +262,11 @@ impl Refinement {
         self.active.is_empty()
     }
 
+    /// Each pixel's light hint (`sensors::hints`), or none.
+    pub fn hints(&self) -> &[u64] {
+        &self.hints
+    }
+
     /// Whether pixel `i` was sensed.
     pub fn is_sensed(&self, i: usize) -> bool {
         self.sensed[i]
@@ -284,18 +289,46 @@ fn fill_quad(
     use crate::gpu_types::radiance_state::{INTERPOLATED, SENSED};
     let at = |x: u32, y: u32| (y * width + x) as usize;
     let corners = [at(q.x0, q.y0), at(q.x1, q.y0), at(q.x0, q.y1), at(q.x1, q.y1)].map(|c| radiance[c].truncate());
-    let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
     for y in q.y0..=q.own_y1 {
         for x in q.x0..=q.own_x1 {
             let i = at(x, y);
             if radiance[i].w == SENSED {
                 continue;
             }
-            let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
-            let weight = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
-            radiance[i] = value(i, weight, corners).extend(INTERPOLATED);
+            radiance[i] = value(i, weights(q, x, y), corners).extend(INTERPOLATED);
         }
     }
+}
+
+/// The bilinear weights of `q`'s corners (x0, y0), (x1, y0), (x0, y1), (x1, y1) at its pixel (x, y).
+fn weights(q: &GpuQuad, x: u32, y: u32) -> [f32; 4] {
+    let (w, h) = ((q.x1 - q.x0).max(1) as f32, (q.y1 - q.y0).max(1) as f32);
+    let (fx, fy) = ((x - q.x0) as f32 / w, (y - q.y0) as f32 / h);
+    [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy]
+}
+
+/// Every pixel's visibilities as the render has them: `visibility` where `sensed`, and in the pixels each of
+/// `quads` owns as the exact interpolation computes them from the corners (`measured_visibility`). For the
+/// supersampling, whose samples take a neighbour's light (`supersample::donor`).
+pub fn visibility_everywhere(
+    visibility: &[Visibility],
+    width: u32,
+    quads: &[GpuQuad],
+    sensed: impl Fn(usize) -> bool,
+) -> Vec<Visibility> {
+    let mut all = visibility.to_vec();
+    for (q, seen) in quads.iter().zip(corner_visibility(visibility, width, quads)) {
+        for y in q.y0..=q.own_y1 {
+            for x in q.x0..=q.own_x1 {
+                let i = (y * width + x) as usize;
+                if !sensed(i) {
+                    let weight = weights(q, x, y);
+                    all[i] = std::array::from_fn(|g| measured_visibility(weight, seen.map(|corner| corner[g])));
+                }
+            }
+        }
+    }
+    all
 }
 
 /// Each quad's corners' visibilities, corners (x0, y0), (x1, y0), (x0, y1), (x1, y1): what the exact
@@ -346,7 +379,6 @@ pub fn interpolate_exact_cpu(
     (g, lights, bias): (&GBufferData, &Lights, f32),
     quads: &[GpuQuad],
 ) {
-    use crate::light::polygon::{Domain, Receiver, projected_solid_angle};
     let width = g.size.width;
     for (q, seen) in quads.iter().zip(corner_visibility) {
         let at = |x: u32, y: u32| (y * width + x) as usize;
@@ -356,21 +388,11 @@ pub fn interpolate_exact_cpu(
             if position.w == 0.0 {
                 return bilinear(weight, corners);
             }
-            let origin = (position.truncate() + n * bias).as_dvec3();
-            let receiver = Receiver { origin, t: glam::DVec3::ZERO, b: glam::DVec3::ZERO, n: n.as_dvec3() };
-            let mut direct = Vec3::ZERO;
-            for (group, light) in lights.groups.iter().enumerate() {
-                let e: Vec3 = (lights.emitters[light.emitters.start as usize..light.emitters.end as usize].iter())
-                    .map(|em| {
-                        let polygon = em.v.map(|v| v.as_dvec3());
-                        em.ke * projected_solid_angle(&receiver, Domain::Hemisphere, &polygon) as f32
-                    })
-                    .sum();
-                if e.max_element() <= 0.0 {
-                    continue;
-                }
-                direct += e * measured_visibility(weight, seen.map(|corner| corner[group]));
-            }
+            let e = lights.unoccluded(position.truncate() + n * bias, n);
+            let direct: Vec3 = (0..lights.groups.len())
+                .filter(|&group| e[group].max_element() > 0.0)
+                .map(|group| e[group] * measured_visibility(weight, seen.map(|corner| corner[group])))
+                .sum();
             bilinear(weight, rests) + direct / std::f32::consts::PI
         });
     }

@@ -114,6 +114,54 @@ pub fn small_light(size: (u32, u32)) -> Scene {
     scene(groups, vec![material("grey", 0.5, 0.0), material("light", 0.0, 2000.0)], camera, size)
 }
 
+/// Thin geometry: a fence of 12 bars 1.2 cm wide (a third of a pixel at 96 × 64) in front of a wall, on a
+/// floor, under a 0.4 m square light (Ke 10) that the camera, 10 cm below its plane, sees nearly edge-on (a
+/// sliver a third of a pixel tall): what pixel centres miss.
+pub fn fence(size: (u32, u32)) -> Scene {
+    let mut bars = Vec::new();
+    for k in 0..12 {
+        let x = -0.55 + 0.1 * k as f32;
+        bars.extend(rect(Vec3::new(x, 0.4, 0.0), Vec3::X * 0.006, Vec3::Y * 0.4, Vec3::Z));
+    }
+    let groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, Vec3::Y)),
+        ("wall", 0, rect(Vec3::new(0.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Y * 1.0, Vec3::Z)),
+        ("fence", 1, bars),
+        ("light", 2, rect(Vec3::new(0.0, 1.5, 0.0), Vec3::X * 0.2, Vec3::Z * 0.2, -Vec3::Y)),
+    ];
+    let camera = Camera::look_at(Vec3::new(0.0, 1.4, 3.0), Vec3::new(0.0, 0.7, -0.5), Vec3::Y, 50.0).unwrap();
+    let materials = vec![material("grey", 0.5, 0.0), material("bars", 0.8, 0.0), material("light", 0.0, 10.0)];
+    scene(groups, materials, camera, size)
+}
+
+/// A sphere of flat facets (12 stacks, 22.5° apart: one surface whose normals jump at every edge) and a box
+/// on a floor beside a wall, under a 0.5 m light: R curves across the facets and breaks at their edges.
+pub fn sphere_by_a_wall(size: (u32, u32)) -> Scene {
+    let groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, Vec3::Y)),
+        ("wall", 0, rect(Vec3::new(0.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Y, Vec3::Z)),
+        ("sphere", 1, meshes::sphere(Vec3::new(-0.3, 0.4, -0.5), 0.4, 12)),
+        ("box", 1, rect(Vec3::new(0.6, 0.3, -0.6), Vec3::X * 0.2, Vec3::Y * 0.3, Vec3::Z)),
+        ("light", 2, rect(Vec3::new(0.3, 1.8, 0.2), Vec3::X * 0.25, Vec3::Z * 0.25, -Vec3::Y)),
+    ];
+    let camera = Camera::look_at(Vec3::new(0.4, 1.2, 2.2), Vec3::new(0.0, 0.4, -0.6), Vec3::Y, 50.0).unwrap();
+    let materials = vec![material("grey", 0.6, 0.0), material("blue", 0.5, 0.0), material("light", 0.0, 20.0)];
+    scene(groups, materials, camera, size)
+}
+
+/// A wall lit at a grazing angle by a light strip at its foot, 5 cm out, with a post between: R peaks and
+/// falls off steeply across the wall, and the post's shadow crosses it.
+pub fn grazing_wall(size: (u32, u32)) -> Scene {
+    let groups = vec![
+        ("wall", 0, rect(Vec3::new(0.0, 1.0, 0.0), Vec3::X * 1.5, Vec3::Y, Vec3::Z)),
+        ("floor", 0, rect(Vec3::new(0.0, 0.0, 1.0), Vec3::X * 1.5, Vec3::Z, Vec3::Y)),
+        ("post", 0, rect(Vec3::new(0.2, 0.4, 0.1), Vec3::X * 0.03, Vec3::Y * 0.4, Vec3::Z)),
+        ("light", 1, rect(Vec3::new(0.0, 0.02, 0.05), Vec3::X * 1.0, Vec3::Z * 0.02, Vec3::Y)),
+    ];
+    let camera = Camera::look_at(Vec3::new(0.3, 1.0, 2.5), Vec3::new(0.0, 0.8, 0.0), Vec3::Y, 50.0).unwrap();
+    scene(groups, vec![material("white", 0.7, 0.0), material("light", 0.0, 10.0)], camera, size)
+}
+
 /// The built-in lightbox (see `scene::builtin`) at `size`.
 pub fn lightbox(size: (u32, u32)) -> Scene {
     builtin_lightbox(ImageSize { width: size.0, height: size.1 })

@@ -1,7 +1,10 @@
 //! The G-buffer on the host: what the camera sees through each pixel centre (paper §III-F). The GPU pass
-//! `passes::gbuffer` and the CPU ray caster `reference::gbuffer` both fill it; the refinement, the CPU
+//! `passes::gbuffer` and the CPU ray caster [`cast`] both fill it (the caster also at any image points: the
+//! supersampling's sub-pixel samples, and the oracle's); the refinement, the CPU
 //! reference and the outputs read it. It lives here, apart from both producers, so that CPU code never
 //! depends on a GPU pass.
+
+pub mod cast;
 
 use glam::Vec4;
 

@@ -1,0 +1,62 @@
+//! The supersampled pixels resolved after composition (docs/DESIGN.md §11), a slice of
+//! [`supersample::SLICE`] pixels at a time: their samples cast again on the host, each given its donor and
+//! visibilities, uploaded and averaged on the GPU (`passes::resolve`).
+
+use anyhow::Result;
+use glam::{Vec3, Vec4};
+
+use super::{Renderer, Targets, map_buffer};
+use crate::gbuffer::GBufferData;
+use crate::passes::resolve::ResolveTargets;
+use crate::scene::{ImageSize, SurfaceId};
+use crate::sensors::refine::Visibility;
+use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleLight};
+use crate::vk::{Access, barrier, transfer};
+
+impl Renderer {
+    /// Resolves `plan`'s pixels over the composed image in `targets` (the centres' G-buffer `g`): writes
+    /// their image and returns, per pixel, R averaged over its samples on a surface and the id most of its
+    /// samples show. `light`, with the exact interpolation: every pixel's visibilities (as interpolated),
+    /// light hint, and each light group's hint bits; the sensors' lift and near distance `offsets`.
+    pub(super) fn resolve_supersampled(
+        &mut self,
+        plan: &Plan,
+        (g, targets): (&GBufferData, &Targets),
+        light: Option<(&[Visibility], &[u64], &[u64])>,
+        (bias, near): (f32, f32),
+        background: Vec3,
+    ) -> Result<(Vec<Vec4>, Vec<SurfaceId>)> {
+        let (mut resolved, mut majority) = (Vec::with_capacity(plan.pixels.len()), Vec::new());
+        if plan.pixels.is_empty() {
+            return Ok((resolved, majority));
+        }
+        let device = self.device.clone();
+        let slice = plan.pixels.len().min(SLICE) as u32;
+        let averaged = map_buffer(&device, "supersampled radiance", ImageSize { width: slice, height: 1 })?;
+        for start in (0..plan.pixels.len()).step_by(SLICE) {
+            let range = start..(start + SLICE).min(plan.pixels.len());
+            let seen = plan.samples(&self.host, &self.bvh, g.size, range.clone());
+            let sample_light = (light.zip(self.light_points.as_deref())).map(|((visibility, hints, bits), points)| {
+                SubSampleLight { visibility, hints, bvh: &self.bvh, points, bits, bias, near }
+            });
+            let samples = supersample::sub_samples(g, (plan, range.clone(), &seen), sample_light);
+            let t = ResolveTargets {
+                composed: &targets.composed,
+                image: &targets.image,
+                resolved: &averaged,
+                gbuffer: &targets.gbuffer,
+                scene: &self.scene,
+            };
+            let exact = light.is_some();
+            self.resolve.bind(&device, (&plan.gpu_pixels(range.clone()), &samples), t, (exact, bias, background))?;
+            device.submit_and_wait(|enc| {
+                barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
+                self.resolve.record(enc);
+                Ok(())
+            })?;
+            resolved.extend(transfer::read_buffer::<Vec4>(&device, &averaged, range.len())?);
+            majority.extend(seen.surface.chunks(SAMPLES).map(supersample::majority_id));
+        }
+        Ok((resolved, majority))
+    }
+}

@@ -1,0 +1,221 @@
+//! Where each sub-pixel sample's R comes from (step 3 of `supersample`): its donor, the nearest pixel on its
+//! surface, and with the exact light each group's visibility at the sample and at the donor.
+
+use std::ops::Range;
+
+use glam::Vec2;
+use rayon::prelude::*;
+
+use super::detect::Point;
+use super::{Plan, SAMPLES};
+use crate::gbuffer::GBufferData;
+use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
+use crate::scene::NO_SURFACE;
+use crate::scene::bvh::Bvh;
+use crate::sensors::hints::{self, LightPoint};
+use crate::sensors::refine::Visibility;
+
+/// What the samples' light groups are judged with (exact estimator and interpolation only).
+pub struct SubSampleLight<'a> {
+    /// Every pixel's visibilities as the render has them (`refine::visibility_everywhere`).
+    pub visibility: &'a [Visibility],
+    /// Every pixel's light hint (`sensors::hints`).
+    pub hints: &'a [u64],
+    pub bvh: &'a Bvh,
+    /// The light hints' points and each group's bits among them (`hints::group_bits`).
+    pub points: &'a [LightPoint],
+    pub bits: &'a [u64],
+    /// A sensor's lift and near distance (`sensors::frame`).
+    pub bias: f32,
+    pub near: f32,
+}
+
+/// The resolve's input for the supersampled pixels `range` of `plan`, one per sample of `samples` (what
+/// they see: `Plan::samples`), against the centres' G-buffer `g`:
+///
+/// - the donor: among the pixel and its 8 neighbours, the nearest (centre to the sample's point) whose
+///   centre shows the sample's surface alike (`detect::Point::alike`), else the nearest of the sample's
+///   id, else the nearest showing any surface, else the pixel itself;
+/// - with `light`, each group's visibility at the sample: where the donor shows its surface, bilinear
+///   between the four pixel centres around the sample that do ([`bilinear`]; the donor's where none does),
+///   with the light hints' detail inside the pixel ([`with_hint_detail`]); else (a sliver no centre shows) the share of the group's hint points in front of the
+///   sample that it sees, or the donor's where none is in front.
+pub fn sub_samples(
+    g: &GBufferData,
+    (plan, range, samples): (&Plan, Range<usize>, &GBufferData),
+    light: Option<SubSampleLight<'_>>,
+) -> Vec<GpuSubSample> {
+    let width = g.size.width;
+    (0..samples.surface.len())
+        .into_par_iter()
+        .map(|s| {
+            let (n, k) = (range.start + s / SAMPLES, s % SAMPLES);
+            let sample = Point::of(samples, s);
+            let (donor, same_surface) = donor(g, plan.pixels[n], plan.point(n, k, width), &sample);
+            let mut record = GpuSubSample {
+                position: samples.position[s].to_array(),
+                normal: samples.normal[s].to_array(),
+                albedo: samples.albedo[s].to_array(),
+                donor,
+                ..Default::default()
+            };
+            if let Some(l) = light.as_ref().filter(|_| sample.surface != NO_SURFACE) {
+                let donor_visibility = l.visibility[donor as usize];
+                let at = plan.point(n, k, width);
+                record.visibility = match same_surface {
+                    true => match bilinear(g, &|i| l.visibility[i], at, &sample) {
+                        Some(v) => with_hint_detail(
+                            v,
+                            l,
+                            (g, at, &sample),
+                            (plan.pixels[n], &samples.position[s], &samples.normal[s]),
+                        ),
+                        None => donor_visibility,
+                    },
+                    // A sliver no centre shows: the share of each group's hint points it sees.
+                    false => {
+                        let (p, normal) = (samples.position[s].truncate(), samples.normal[s].truncate());
+                        let (facing, visible) = hints::masks(l.bvh, l.points, (p, normal), l.bias, l.near);
+                        let share = hints::shares(l.bits, Some(facing), visible);
+                        std::array::from_fn(|g| if share[g] < 0.0 { donor_visibility[g] } else { share[g] })
+                    }
+                };
+                record.donor_visibility = donor_visibility;
+            }
+            record
+        })
+        .collect()
+}
+
+/// `v`, a sample's bilinear visibilities, with the detail the light hints see inside the pixel: the share of
+/// each group's hint points the sample sees, less that share bilinear between the same centres (clamped to
+/// [0, 1]). A shadow's edge narrower than a pixel is then where the hints put it, not smeared over two
+/// pixels as the bilinear visibility alone would; in even light the two shares cancel. Only where the hints
+/// of the pixel's 3 × 3 neighbourhood differ (elsewhere there is no detail to add).
+fn with_hint_detail(
+    v: Visibility,
+    l: &SubSampleLight<'_>,
+    (g, at, sample): (&GBufferData, Vec2, &Point),
+    (pixel, position, normal): (u32, &glam::Vec4, &glam::Vec4),
+) -> Visibility {
+    let (w, h) = (g.size.width as i64, g.size.height as i64);
+    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
+    let around = (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)));
+    let mut hints = around
+        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+        .map(|(qx, qy)| l.hints[(qy * w + qx) as usize]);
+    let first = hints.next();
+    if l.hints.is_empty() || hints.all(|m| Some(m) == first) {
+        return v;
+    }
+    let share = |mask: u64| hints::shares(l.bits, None, mask);
+    let Some(between) = bilinear(g, &|i| share(l.hints[i]), at, sample) else { return v };
+    let own = share(hints::mask(l.bvh, l.points, (position.truncate(), normal.truncate()), l.bias, l.near));
+    std::array::from_fn(|k| {
+        if v[k] < 0.0 || own[k] < 0.0 || between[k] < 0.0 { v[k] } else { (v[k] + own[k] - between[k]).clamp(0.0, 1.0) }
+    })
+}
+
+/// Per-pixel values `value` (a visibility per group) at the image point `at`, showing `sample`: bilinear
+/// between the four pixel centres around it. A centre that does not show the sample's surface alike is
+/// extrapolated from the two beyond it along a row or column that do (`2·V_a − V_b`, clamped to [0, 1]), or
+/// left out; `None` where no centre is left. A shadow's edge crossing the pixel then moves through its
+/// samples as the interpolation moves it between sensed pixels, and a penumbra that runs into a silhouette
+/// keeps its slope up to it.
+fn bilinear(g: &GBufferData, value: &dyn Fn(usize) -> Visibility, at: Vec2, sample: &Point) -> Option<Visibility> {
+    let (w, h) = (g.size.width as i64, g.size.height as i64);
+    let base = at - Vec2::splat(0.5);
+    let (x0, y0) = (base.x.floor() as i64, base.y.floor() as i64);
+    let (fx, fy) = (base.x - x0 as f32, base.y - y0 as f32);
+    let alike = |x: i64, y: i64| -> Option<Visibility> {
+        let inside = x >= 0 && y >= 0 && x < w && y < h;
+        let i = (y * w + x) as usize;
+        (inside && Point::of(g, i).alike(sample)).then(|| value(i))
+    };
+    let corner = |dx: i64, dy: i64| -> Option<Visibility> {
+        let (x, y) = (x0 + dx, y0 + dy);
+        if let Some(v) = alike(x, y) {
+            return Some(v);
+        }
+        // Along the column, then the row: the neighbour inside the four and the one beyond it.
+        let (sy, sx) = (1 - 2 * dy, 1 - 2 * dx);
+        let pairs = [((x, y + sy), (x, y + 2 * sy)), ((x + sx, y), (x + 2 * sx, y))];
+        pairs.iter().find_map(|&((ax, ay), (bx, by))| {
+            let (a, b) = (alike(ax, ay)?, alike(bx, by)?);
+            Some(std::array::from_fn(
+                |k| if a[k] < 0.0 || b[k] < 0.0 { a[k] } else { (2.0 * a[k] - b[k]).clamp(0.0, 1.0) },
+            ))
+        })
+    };
+    let mut sum = [0.0f32; MAX_GROUPS];
+    let mut total = 0.0;
+    for (dx, dy, weight) in
+        [(0, 0, (1.0 - fx) * (1.0 - fy)), (1, 0, fx * (1.0 - fy)), (0, 1, (1.0 - fx) * fy), (1, 1, fx * fy)]
+    {
+        let Some(v) = corner(dx, dy).filter(|_| weight > 0.0) else { continue };
+        for (s, v) in sum.iter_mut().zip(&v) {
+            *s += weight * v;
+        }
+        total += weight;
+    }
+    (total > 0.0).then(|| sum.map(|s| s / total))
+}
+
+/// The donor of a sample at the image point `at` in `pixel`, showing `sample`; and whether it shows the
+/// sample's surface (see [`sub_samples`]).
+fn donor(g: &GBufferData, pixel: u32, at: Vec2, sample: &Point) -> (u32, bool) {
+    let (w, h) = (g.size.width as i64, g.size.height as i64);
+    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
+    let around = (-1..=1)
+        .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+        .map(|(qx, qy)| {
+            let distance = (Vec2::new(qx as f32 + 0.5, qy as f32 + 0.5) - at).length_squared();
+            ((qy * w + qx) as u32, distance)
+        });
+    let nearest = |accept: &dyn Fn(&Point) -> bool| {
+        around
+            .clone()
+            .filter(|&(q, _)| accept(&Point::of(g, q as usize)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+            .map(|(q, _)| q)
+    };
+    if let Some(q) = nearest(&|p| p.alike(sample)) {
+        return (q, true);
+    }
+    if let Some(q) = nearest(&|p| p.surface == sample.surface) {
+        return (q, true);
+    }
+    (nearest(&|p| p.surface != NO_SURFACE).unwrap_or(pixel), false)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec3, Vec4};
+
+    use super::*;
+    use crate::scene::ImageSize;
+
+    /// A 2 × 2 floor (one surface, but pixel 3 is another); group 0 seen 0, 1, 0.5 at pixels 0, 1, 2.
+    #[test]
+    fn visibility_is_bilinear_over_the_centres_on_the_samples_surface() {
+        let position: Vec<Vec4> = (0..4).map(|i| Vec3::new((i % 2) as f32, 0.0, (i / 2) as f32).extend(1.0)).collect();
+        let g = GBufferData {
+            size: ImageSize { width: 2, height: 2 },
+            normal: vec![Vec4::new(0.0, 1.0, 0.0, 1.0); 4],
+            albedo: vec![Vec4::ONE; 4],
+            emission: vec![Vec4::ZERO; 4],
+            surface: vec![1, 1, 1, 2],
+            position,
+        };
+        let visibility: Vec<Visibility> =
+            [0.0, 1.0, 0.5, 0.9].iter().map(|&v| std::array::from_fn(|k| if k == 0 { v } else { -1.0 })).collect();
+        let sample = Point::of(&g, 0);
+        let v = |x: f32, y: f32| bilinear(&g, &|i| visibility[i], Vec2::new(x, y), &sample).unwrap()[0];
+        assert_eq!(v(0.5, 0.5), 0.0, "at pixel 0's centre");
+        assert!((v(1.0, 0.5) - 0.5).abs() < 1e-6, "halfway between pixels 0 and 1");
+        // At the middle of the four centres: pixel 3 shows another surface and nothing lies beyond it to
+        // extrapolate from (a 2 × 2 image), so the others weigh ⅓ each.
+        assert!((v(1.0, 1.0) - 0.5).abs() < 1e-6, "(0 + 1 + 0.5) / 3, not with pixel 3's 0.9");
+    }
+}
