@@ -1,16 +1,20 @@
 #!/usr/bin/env bash
 # The accuracy tables of docs/ACCURACY.md: sensorlight against its CPU oracle (`sensorlight reference`, light
-# sampling + MIS, ε = 0 or as stated; path tracing for global illumination), per-pixel relative RMSE of R over
-# lit pixels, silhouettes and emitters masked, the oracle's own noise taken out ("own error"). The peer and
-# global-illumination tables compare images (Le + Kd·R). References are made once into OUT and reused.
+# sampling + MIS, ε = 0 or as stated; path tracing for global illumination; every pixel over its square, as
+# renders are by default), per-pixel relative RMSE over lit pixels, the oracle's own noise taken out ("own
+# error"), over the whole image (nothing masked) and over the interior (silhouettes, emitters and the
+# background masked: of R, or of images for the peer and global-illumination tables). References are made
+# once into OUT and reused.
 #
 #   scripts/accuracy.sh OUT [every|curve|ajar|peer|gi|gi-scenes|gi-peer]...   (default: every curve ajar)
 #
 # every: every pixel sensed, rd 64, no filter, ε 0 — the paper's estimator against the exact one.
 # curve: the shipped Cornell box at 256², ε 0.1, defaults but for rd (and dradiance): error against time.
 # ajar:  the door-ajar scene, defaults against every pixel sensed.
-# peer:  against Mitsuba 3's direct light (scripts/peer/mitsuba_direct.py, pixel centres, ε 0) at each
-#        scene's own size: PEER=DIR holding <scene>-ref.exr (made as docs/ACCURACY.md says).
+# peer:  against Mitsuba 3's direct light (scripts/peer/mitsuba_direct.py, box filter over each pixel, ε 0)
+#        at each scene's own size: PEER=DIR holding <scene>-ref.exr (made as docs/ACCURACY.md says).
+# whole: the defaults on the shipped scenes, whole images (Le + Kd·R) against the oracle's pixel squares,
+#        with and without --aa.
 # gi:    global illumination on the shipped Cornell box at 256²: the defaults, then bounces, cache
 #        resolution, cache sensor size, rd and dradiance each varied, against the path tracer (4 096 samples).
 # gi-scenes: the defaults on the room, the door ajar, the small light and a 10⁶-triangle sphere in the box
@@ -42,16 +46,18 @@ row() { # LABEL REFERENCE SCENE RENDER-FLAGS...
     python3 - "$label" "$out/$label.json" "$out/$label.cmp.json" "$*" <<'PY'
 import json, sys
 label, stats, cmp, flags = sys.argv[1], json.load(open(sys.argv[2])), json.load(open(sys.argv[3])), sys.argv[4]
-own = cmp["own_error"] if cmp["own_error"] is not None else cmp["relative_rmse"]
-noise = "—" if cmp["reference_noise"] is None else f"{100 * cmp['reference_noise']:.2f} %"
-print(f"| {label} | `{flags}` | {stats['sensors']} | {stats['total_seconds']:.2f} | {100 * own:.2f} % | "
-      f"{100 * cmp['relative_rmse']:.2f} % | {noise} | {cmp['leaked_pixels']} |")
+def own(figures):
+    return figures["own_error"] if figures["own_error"] is not None else figures["relative_rmse"]
+whole, interior = cmp["whole"], cmp["interior"]
+noise = "—" if whole["reference_noise"] is None else f"{100 * whole['reference_noise']:.2f} %"
+print(f"| {label} | `{flags}` | {stats['sensors']} | {stats['total_seconds']:.2f} | {100 * own(whole):.2f} % | "
+      f"{100 * own(interior):.2f} % | {noise} | {interior['leaked_pixels']} |")
 PY
 }
 
 header() {
     echo
-    echo "| case | flags | sensors | seconds | own error | relative RMSE | oracle noise | leaked px |"
+    echo "| case | flags | sensors | seconds | whole image: own error | interior: own error | oracle noise (whole) | leaked px |"
     echo "|---|---|---|---|---|---|---|---|"
 }
 
@@ -91,8 +97,24 @@ for table in ${tables[*]}; do
         cp "$out/ajar-every.exr" "$out/ajar-every-copy.exr" # compare refuses an output that is also an input
         row ajar-defaults-vs-every "$out/ajar-every-copy.exr" door-ajar/door-ajar.toml "${size[@]}"
         ;;
+    whole)
+        echo "### Whole images at the defaults, against the oracle's pixel squares"
+        header
+        layer=""
+        ref cornell256-gi cornell/cornell.toml 256 256 hemicube 4096 "--bounces auto"
+        row whole-cornell "$out/cornell256-gi-ref.exr" cornell/cornell.toml
+        row whole-cornell-aa-off "$out/cornell256-gi-ref.exr" cornell/cornell.toml --aa off
+        ref small-light-gi small-light/small-light.toml 160 120 hemicube 4096 "--bounces auto"
+        row whole-small-light "$out/small-light-gi-ref.exr" small-light/small-light.toml --width 160 --height 120
+        row whole-small-light-aa-off "$out/small-light-gi-ref.exr" small-light/small-light.toml --width 160 \
+            --height 120 --aa off
+        ref small-light-d small-light/small-light.toml 320 240 hemicube 1024 "--epsilon 0"
+        row whole-small-light-direct "$out/small-light-d-ref.exr" small-light/small-light.toml --epsilon 0
+        row whole-small-light-direct-aa-off "$out/small-light-d-ref.exr" small-light/small-light.toml --epsilon 0 \
+            --aa off
+        ;;
     peer)
-        echo "### Against Mitsuba 3 (direct light, ε 0, each scene's own size)"
+        echo "### Against Mitsuba 3 (direct light, ε 0, box filter, each scene's own size)"
         header
         layer="" # Mitsuba writes the image (Le + albedo·R), not R
         for scene in cornell small-light door-ajar room; do
@@ -145,12 +167,13 @@ for table in ${tables[*]}; do
         for spp in 256 1024 4096; do
             m="$out/mitsuba-path-$spp.exr"
             seconds=$("${MITSUBA_PY:-python3}" scripts/peer/mitsuba_direct.py scenes/cornell/cornell.toml -o "$m" \
-                --integrator path --max-depth -1 --spp "$spp" --pixel-sampling centre | sed -n 's/.*total \([0-9.]*\) s.*/\1/p')
+                --integrator path --max-depth -1 --spp "$spp" --pixel-sampling box | sed -n 's/.*total \([0-9.]*\) s.*/\1/p')
             "$bin" compare "$m" "$out/cornell256-gi-ref.exr" --json "$m.json" >/dev/null 2>&1
             python3 - "$spp" "$seconds" "$m.json" <<'PY'
 import json, sys
 spp, seconds, cmp = sys.argv[1], float(sys.argv[2]), json.load(open(sys.argv[3]))
-print(f"| {spp} | {seconds:.1f} | {100 * cmp['own_error']:.2f} % | {100 * cmp['relative_rmse']:.2f} % |")
+whole = cmp["whole"]
+print(f"| {spp} | {seconds:.1f} | {100 * whole['own_error']:.2f} % | {100 * whole['relative_rmse']:.2f} % |")
 PY
         done
         ;;

@@ -40,7 +40,7 @@ for c in "${cases[@]}"; do
         start=$(date +%s.%N)
         "$py" scripts/peer/mitsuba_direct.py "scenes/$scene" -o "$out/$name-mitsuba-$seed.exr" --width "$w" \
             --height "$h" --integrator path --max-depth "$depth" --spp "$spp" --seed "$seed" \
-            --pixel-sampling centre >"$out/$name-mitsuba-$seed.log"
+            --pixel-sampling box >"$out/$name-mitsuba-$seed.log"
         mitsuba_s+=("$(seconds "$start")")
     done
     "$bin" compare "$out/$name-mitsuba-0.exr" "$out/$name-oracle.exr" --json "$out/$name.cmp.json" >/dev/null 2>&1
@@ -51,6 +51,7 @@ for c in "${cases[@]}"; do
 import json, math, sys
 name, bounces, depth, samples, oracle_s, spp, mitsuba_s = sys.argv[1:8]
 cmp, seeds = json.load(open(sys.argv[8])), json.load(open(sys.argv[9]))
+cmp, seeds = cmp["whole"], seeds["whole"]  # whole images: both renderers integrate each pixel's square
 oracle_noise = cmp["reference_noise"]
 mitsuba_noise = seeds["relative_rmse"] / math.sqrt(2)  # two independent renders of equal noise
 rmse = cmp["relative_rmse"]

@@ -59,9 +59,9 @@ pub struct RenderArgs {
     cache_sensor_size: Option<u32>,
     /// Also write AOVs into the EXR (an .exr output only): radiance.* (R; a supersampled pixel's, the mean
     /// over its samples on a surface), sensor_mask (1 sensed, 0.5 interpolated), supersampled (1 where the
-    /// pixel took sub-pixel samples), surface_id (a supersampled pixel's: the one most samples show), and at
-    /// the pixel centre emission.*, and a denoiser's: albedo.* (Kd), normal.X/Y/Z (unit, world space),
-    /// depth.Z (distance from the eye)
+    /// pixel took sub-pixel samples), surface_id, emission.*, and a denoiser's: albedo.* (Kd), normal.X/Y/Z
+    /// (unit, world space), depth.Z (distance from the eye), each of what the pixel's centre sees (of a
+    /// supersampled pixel whose samples mostly show another surface: of that surface)
     #[arg(long)]
     aovs: bool,
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)

@@ -446,8 +446,8 @@ pub struct RenderOutput {
     /// R after interpolation and filtering (a supersampled pixel's: the mean over its samples on a surface);
     /// w says how it was obtained (see `gpu_types::radiance_state`).
     pub radiance: Vec<Vec4>,
-    /// The G-buffer at the pixel centres, but for the surface id of a supersampled pixel: the one most of
-    /// its samples show.
+    /// The G-buffer at the pixel centres, but where most of a supersampled pixel's samples show another
+    /// surface than its centre: what the first of those sees.
     pub gbuffer: GBufferData,
     /// The pixels that were supersampled (`--aa on`), in increasing index.
     pub supersampled: Vec<u32>,
@@ -834,17 +834,21 @@ impl Renderer {
             })
         });
         let light = everywhere.as_deref().map(|v| (v, refinement.hints(), bits.as_slice()));
-        let (resolved, majority) =
+        let (resolved, majorities) =
             self.resolve_supersampled(&plan, (&g, &targets), light, (bias, near), frame.background)?;
         supersample_time += start_samples.elapsed();
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
         let mut radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
-        // The AOVs of a supersampled pixel: R over its samples on a surface, the id most of them show.
+        // The AOVs of a supersampled pixel: R over its samples on a surface; the G-buffer's of the surface
+        // most of them show.
         let mut g = g;
-        for ((&i, r), id) in plan.pixels.iter().zip(&resolved).zip(majority) {
+        for ((&i, r), majority) in plan.pixels.iter().zip(&resolved).zip(majorities) {
             let i = i as usize;
             radiance[i] = r.truncate().extend(radiance[i].w);
-            g.surface[i] = id;
+            if let Some(v) = majority {
+                (g.position[i], g.normal[i], g.albedo[i], g.emission[i], g.surface[i]) =
+                    (v.position, v.normal, v.albedo, v.emission, v.surface);
+            }
         }
         let post_time = post_start.elapsed();
         check_finite(&image, size.width as usize, &device.adapter.driver)?;

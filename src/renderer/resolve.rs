@@ -7,16 +7,18 @@ use glam::{Vec3, Vec4};
 
 use super::{Renderer, Targets, map_buffer};
 use crate::gbuffer::GBufferData;
+use crate::gbuffer::cast::Visible;
 use crate::passes::resolve::ResolveTargets;
-use crate::scene::{ImageSize, SurfaceId};
+use crate::scene::ImageSize;
 use crate::sensors::refine::Visibility;
 use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleLight};
 use crate::vk::{Access, barrier, transfer};
 
 impl Renderer {
     /// Resolves `plan`'s pixels over the composed image in `targets` (the centres' G-buffer `g`): writes
-    /// their image and returns, per pixel, R averaged over its samples on a surface and the id most of its
-    /// samples show. `light`, with the exact interpolation: every pixel's visibilities (as interpolated),
+    /// their image and returns, per pixel, R averaged over its samples on a surface, and where most of its
+    /// samples show another surface than its centre, what the first of those sees (its G-buffer AOVs then
+    /// describe one surface, the one most of the pixel shows). `light`, with the exact interpolation: every pixel's visibilities (as interpolated),
     /// light hint, and each light group's hint bits; the sensors' lift and near distance `offsets`.
     pub(super) fn resolve_supersampled(
         &mut self,
@@ -25,7 +27,7 @@ impl Renderer {
         light: Option<(&[Visibility], &[u64], &[u64])>,
         (bias, near): (f32, f32),
         background: Vec3,
-    ) -> Result<(Vec<Vec4>, Vec<SurfaceId>)> {
+    ) -> Result<(Vec<Vec4>, Vec<Option<Visible>>)> {
         let (mut resolved, mut majority) = (Vec::with_capacity(plan.pixels.len()), Vec::new());
         if plan.pixels.is_empty() {
             return Ok((resolved, majority));
@@ -55,7 +57,20 @@ impl Renderer {
                 Ok(())
             })?;
             resolved.extend(transfer::read_buffer::<Vec4>(&device, &averaged, range.len())?);
-            majority.extend(seen.surface.chunks(SAMPLES).map(supersample::majority_id));
+            for (n, ids) in seen.surface.chunks(SAMPLES).enumerate() {
+                let id = supersample::majority_id(ids);
+                let centre = g.surface[plan.pixels[range.start + n] as usize];
+                majority.push((id != centre).then(|| {
+                    let s = n * SAMPLES + ids.iter().position(|&i| i == id).unwrap_or(0);
+                    Visible {
+                        position: seen.position[s],
+                        normal: seen.normal[s],
+                        albedo: seen.albedo[s],
+                        emission: seen.emission[s],
+                        surface: id,
+                    }
+                }));
+            }
         }
         Ok((resolved, majority))
     }
