@@ -12,7 +12,9 @@
 //!
 //! - **Lit** means the reference's luminance exceeds [`LIT_FRACTION`] (1 %) of its mean luminance over the
 //!   compared pixels; darker pixels would divide by noise. The threshold is reported.
+//!
 //! Masked in the interior figure only:
+//!
 //! - **Silhouettes** are masked where either image has a `surface_id` channel: a pixel whose 3 × 3
 //!   neighbourhood holds another id there. Renderers filter pixels differently along an edge, which is not
 //!   what a comparison of lighting should measure. The masked pixels are counted and reported.
