@@ -91,3 +91,42 @@ fn progress_sees_every_phase_round_and_snapshot() {
     let lit = |img: &[Vec4]| img.iter().filter(|p| p.truncate().max_element() > 0.0).count();
     assert!(lit(first) * 10 >= lit(&output.image) * 9, "first preview lit {} of {}", lit(first), lit(&output.image));
 }
+
+/// With global illumination under a lit background, the radiance cache's sky pass is part of its first
+/// bounce: no sensor is reported done before it was queued, and every one queued is done (the display's
+/// count of a bounce once ran past its total).
+#[test]
+fn the_cache_never_reports_more_sensors_done_than_queued() {
+    #[derive(Default)]
+    struct Counts {
+        queued: RefCell<u64>,
+        done: RefCell<u64>,
+        overrun: RefCell<bool>,
+    }
+    impl Progress for Counts {
+        fn queued(&self, n: u64) {
+            *self.queued.borrow_mut() += n;
+        }
+        fn done(&self, n: u64) {
+            *self.done.borrow_mut() += n;
+            *self.overrun.borrow_mut() |= *self.done.borrow() > *self.queued.borrow();
+        }
+    }
+    let scene = common::lightbox((24, 20));
+    let indirect = sensorlight::params::Indirect::Bounces(sensorlight::params::Bounces::Fixed(2));
+    let frame = FrameParams { tile: 8, dradiance: 0.2, ..FrameParams::every_pixel(indirect, glam::Vec3::splat(0.3)) };
+    let counts = Counts::default();
+    let output = common::gpu(|device| {
+        let cache = sensorlight::renderer::CacheConfig { resolution: 4, sensor_size: 8 };
+        let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
+            .radiance_cache(Some(cache))
+            .build_unchecked(StrategyKind::default())
+            .unwrap();
+        renderer.render(scene.image, &frame, &counts).unwrap()
+    });
+    let gi = output.stats.gi.as_ref().expect("a radiance cache");
+    assert!(!*counts.overrun.borrow(), "more sensors done than queued at some point");
+    let (queued, done) = (*counts.queued.borrow(), *counts.done.borrow());
+    assert_eq!(queued, done, "every sensor queued is done");
+    assert!(done > output.stats.sensors + gi.entries * 2, "the sky pass is counted: {done}");
+}

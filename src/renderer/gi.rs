@@ -140,7 +140,9 @@ pub(super) fn solve(
     runners.first.bind(&maps)?;
     runners.later.bind(&maps)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
-    progress.queued(first.len() as u64);
+    // The first bounce: the direct light, and what the entries see of the background (its own pass).
+    let sky_pass = if background != Vec3::ZERO { n } else { 0 };
+    progress.queued((first.len() + sky_pass) as u64);
     let direct = CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false };
     let sensed = sense(runners.first, &first_g, direct, progress)?;
     let mut r = sensed[..n].to_vec();
