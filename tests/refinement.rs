@@ -4,12 +4,10 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use sensorlight::gbuffer::GBufferData;
-use sensorlight::gpu_scene::GpuScene;
 use sensorlight::gpu_types::GpuQuad;
 use sensorlight::gpu_types::MAX_GROUPS;
 use sensorlight::gpu_types::radiance_state::{INTERPOLATED, SENSED};
 use sensorlight::light::groups::Lights;
-use sensorlight::passes::gbuffer::GBufferPass;
 use sensorlight::passes::interpolate::{Exact, InterpolatePass};
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::{Camera, ImageSize, NO_SURFACE};
@@ -213,12 +211,7 @@ fn gpu_exact_interpolation_matches_the_cpu_twin() {
     let bias = 2e-4 * scene.mesh.scale();
     let noise = |i: u32, salt: u64| hash(i as u64 ^ (salt << 40)) as f32 / u64::MAX as f32;
     let (g, initial, indirect, quads, corners, got) = common::gpu(|device| {
-        let gpu_scene = GpuScene::upload(device, &scene, None, None).unwrap();
-        let gbuffer = GBufferPass::new(device, &gpu_scene)
-            .unwrap()
-            .render(device, &gpu_scene, &scene.camera, size, 1e-3)
-            .unwrap();
-        let g = gbuffer.read_back(device).unwrap();
+        let (gpu_scene, gbuffer, g) = common::raster_gbuffer(device, &scene, size);
         let (mut refinement, mut pending) = Refinement::start(&g, 8, 1e30);
         let mut sensed = vec![false; (w * h) as usize];
         while !refinement.is_finished() {

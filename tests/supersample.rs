@@ -4,11 +4,9 @@
 mod common;
 
 use glam::{Vec3, Vec4};
-use sensorlight::gpu_scene::GpuScene;
 use sensorlight::light::groups::Lights;
 use sensorlight::output::compare::{Comparison, Picture, compare};
 use sensorlight::params::{Antialiasing, Overrides, RenderParams};
-use sensorlight::passes::gbuffer::GBufferPass;
 use sensorlight::passes::resolve::{ResolvePass, ResolveTargets};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::reference::sampling::hash;
@@ -34,12 +32,7 @@ fn gpu_resolve_matches_the_cpu_twin() {
     let lights = Lights::new(&scene.mesh);
     let background = Vec3::new(0.1, 0.2, 0.3);
     let (g, plan, samples, got) = common::gpu(|device| {
-        let gpu_scene = GpuScene::upload(device, &scene, None, None).unwrap();
-        let gbuffer = GBufferPass::new(device, &gpu_scene)
-            .unwrap()
-            .render(device, &gpu_scene, &scene.camera, size, 1e-3)
-            .unwrap();
-        let g = gbuffer.read_back(device).unwrap();
+        let (gpu_scene, gbuffer, g) = common::raster_gbuffer(device, &scene, size);
         let bvh = Bvh::build(&scene.mesh.triangles);
         let points = hints::light_points(&lights);
         let bits = hints::group_bits(&lights);

@@ -11,7 +11,7 @@ use ash::vk;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::EmitterPush;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Encoder};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, compute::spilled};
 
 pub struct EmitterPass {
     kernel: ComputeKernel,
@@ -70,9 +70,7 @@ impl EmitterPass {
             return;
         }
         // Workgroups beyond the per-dimension limit spill into y; the shader skips indices past the last.
-        let workgroups = invocations.div_ceil(64);
-        let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
         let push = EmitterPush { sensors, chunks: self.chunk_count, groups: self.groups, _pad: 0 };
-        self.kernel.dispatch(enc, slot, &push, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
+        self.kernel.dispatch(enc, slot, &push, spilled(enc, invocations.div_ceil(64)));
     }
 }

@@ -15,7 +15,7 @@ use crate::gpu_types::{ExactInterpolatePush, GpuQuad, ImagePush, MAX_GROUPS};
 use crate::passes::gbuffer::GBuffer;
 use crate::scene::ImageSize;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Encoder, transfer};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, compute::spilled, transfer};
 
 /// Maps interpolated alike: the radiance map and its indirect part.
 const MAPS: u32 = 2;
@@ -131,15 +131,11 @@ impl InterpolatePass {
             return;
         }
         // Workgroups beyond the per-dimension limit spill into y; the shader skips indices past `count`.
-        let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
-        let groups = [self.count.min(max_x), self.count.div_ceil(max_x), 1];
+        let groups = spilled(enc, self.count);
         let push = ImagePush { width: size.width, height: size.height, radius: 0, count: self.count };
         // The radiance map's corners are sensed pixels, which neither dispatch writes: no barrier between.
         match &self.exact_push {
-            Some(exact) => {
-                let workgroups = exact.count.div_ceil(64);
-                self.exact.dispatch(enc, 0, exact, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
-            }
+            Some(exact) => self.exact.dispatch(enc, 0, exact, spilled(enc, exact.count.div_ceil(64))),
             None => self.kernel.dispatch(enc, 0, &push, groups),
         }
         self.kernel.dispatch(enc, 1, &push, groups);

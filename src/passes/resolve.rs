@@ -13,7 +13,7 @@ use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSubSample, GpuSupersampledPixel, ResolvePush};
 use crate::passes::gbuffer::GBuffer;
 use crate::shaders;
-use crate::vk::{Buffer, ComputeKernel, Device, Encoder, transfer};
+use crate::vk::{Buffer, ComputeKernel, Device, Encoder, compute::spilled, transfer};
 
 pub struct ResolvePass {
     kernel: ComputeKernel,
@@ -89,8 +89,7 @@ impl ResolvePass {
     /// visible.
     pub fn record(&self, enc: &Encoder<'_>) {
         let Some(push) = &self.push else { return };
-        let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
-        let workgroups = push.count.div_ceil(64);
-        self.kernel.dispatch(enc, 0, push, [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]);
+        // One invocation per pixel; workgroups beyond the per-dimension limit spill into y.
+        self.kernel.dispatch(enc, 0, push, spilled(enc, push.count.div_ceil(64)));
     }
 }

@@ -38,8 +38,9 @@ pub struct SubSampleLight<'a> {
 ///   id, else the nearest showing any surface, else the pixel itself;
 /// - with `light`, each group's visibility at the sample: where the donor shows its surface, bilinear
 ///   between the four pixel centres around the sample that do ([`bilinear`]; the donor's where none does),
-///   with the light hints' detail inside the pixel ([`with_hint_detail`]); else (a sliver no centre shows) the share of the group's hint points in front of the
-///   sample that it sees, or the donor's where none is in front.
+///   with the light hints' detail inside the pixel ([`with_hint_detail`]); else (a sliver no centre shows)
+///   the share of the group's hint points in front of the sample that it sees, or the donor's where none
+///   is in front.
 pub fn sub_samples(
     g: &GBufferData,
     (plan, range, samples): (&Plan, Range<usize>, &GBufferData),
@@ -50,8 +51,8 @@ pub fn sub_samples(
         .into_par_iter()
         .map(|s| {
             let (n, k) = (range.start + s / SAMPLES, s % SAMPLES);
-            let sample = Point::of(samples, s);
-            let (donor, same_surface) = donor(g, plan.pixels[n], plan.point(n, k, width), &sample);
+            let (sample, at) = (Point::of(samples, s), plan.point(n, k, width));
+            let (donor, same_surface) = donor(g, plan.pixels[n], at, &sample);
             let mut record = GpuSubSample {
                 position: samples.position[s].to_array(),
                 normal: samples.normal[s].to_array(),
@@ -61,7 +62,6 @@ pub fn sub_samples(
             };
             if let Some(l) = light.as_ref().filter(|_| sample.surface != NO_SURFACE) {
                 let donor_visibility = l.visibility[donor as usize];
-                let at = plan.point(n, k, width);
                 record.visibility = match same_surface {
                     true => match bilinear(g, &|i| l.visibility[i], at, &sample) {
                         Some(v) => with_hint_detail(

@@ -3,9 +3,8 @@
 //! brighter than what it lights (17 against 0.03 on the Cornell box's ceiling), so a pixel on its rim that
 //! samples its coverage in steps of 1/SAMPLES is tens of percent off; the clipped area has no such step.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
-use crate::gbuffer::GBufferData;
 use crate::gbuffer::cast::first_surface;
 use crate::scene::bvh::Bvh;
 use crate::scene::{ImageSize, Scene, SurfaceId};
@@ -39,14 +38,15 @@ pub fn screen_emitters(scene: &Scene, size: ImageSize) -> (Vec<ScreenEmitter>, V
 }
 
 /// The mean radiance the square of pixel (x, y) emits: each of `emitters` clipped to it, weighed by the
-/// share of its part that is seen (of the pixel's `samples` at image points `points` that fall inside it,
+/// share of its part that is seen (of the pixel's samples, which see `surface` and `emission` at the image
+/// points `points`, those that fall inside it,
 /// those that meet its surface's front; where none falls inside, a ray through the part's centroid
 /// decides); plus the samples' own emission on the surfaces in `sampled`.
 pub fn emitted(
     (scene, bvh, size): (&Scene, &Bvh, ImageSize),
     (emitters, sampled): (&[ScreenEmitter], &[SurfaceId]),
     (x, y): (u32, u32),
-    (samples, points): (&GBufferData, &[Vec2]),
+    (surface, emission, points): (&[SurfaceId], &[Vec4], &[Vec2]),
 ) -> Vec3 {
     let square =
         [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(dx, dy)| Vec2::new(x as f32 + dx, y as f32 + dy));
@@ -69,14 +69,13 @@ pub fn emitted(
                 .is_some_and(|v| v.surface == e.surface && v.emission.truncate() != Vec3::ZERO) as u32
                 as f32
         } else {
-            let meets =
-                |k: &&usize| samples.surface[**k] == e.surface && samples.emission[**k].truncate() != Vec3::ZERO;
+            let meets = |k: &&usize| surface[**k] == e.surface && emission[**k].truncate() != Vec3::ZERO;
             inside.iter().filter(meets).count() as f32 / inside.len() as f32
         };
         sum += e.ke * area * seen;
     }
-    let on_sampled = (0..samples.surface.len()).filter(|&k| sampled.contains(&samples.surface[k]));
-    sum + on_sampled.map(|k| samples.emission[k].truncate()).sum::<Vec3>() / samples.surface.len().max(1) as f32
+    let on_sampled = (0..surface.len()).filter(|&k| sampled.contains(&surface[k]));
+    sum + on_sampled.map(|k| emission[k].truncate()).sum::<Vec3>() / surface.len().max(1) as f32
 }
 
 /// The convex polygon `square` clipped to the triangle `t` (Sutherland–Hodgman; either winding).

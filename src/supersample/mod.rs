@@ -117,16 +117,8 @@ pub fn plan(scene: &Scene, bvh: &Bvh, g: &GBufferData, flags: &[Flags]) -> Plan 
         let emitted: Vec<Vec3> = (slice.par_iter().enumerate())
             .map(|(n, &i)| {
                 let range = n * SAMPLES..(n + 1) * SAMPLES;
-                let own = GBufferData {
-                    size: ImageSize { width: SAMPLES as u32, height: 1 },
-                    position: Vec::new(),
-                    normal: Vec::new(),
-                    albedo: Vec::new(),
-                    emission: cast.emission[range.clone()].to_vec(),
-                    surface: cast.surface[range.clone()].to_vec(),
-                };
-                let pixel = (i % width, i / width);
-                emission::emitted((scene, bvh, g.size), (&emitters, &sampled), pixel, (&own, &points[range]))
+                let seen = (&cast.surface[range.clone()], &cast.emission[range.clone()], &points[range]);
+                emission::emitted((scene, bvh, g.size), (&emitters, &sampled), (i % width, i / width), seen)
             })
             .collect();
         for (n, &i) in slice.iter().enumerate() {

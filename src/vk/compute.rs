@@ -76,3 +76,10 @@ impl ComputeKernel {
 pub fn groups_for(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
 }
+
+/// `workgroups` laid out for a dispatch on `enc`'s device: along x up to its per-dimension limit, the rest
+/// spilling into y (the shader flattens the two and skips indices past its count).
+pub fn spilled(enc: &Encoder<'_>, workgroups: u32) -> [u32; 3] {
+    let max_x = enc.device().adapter.limits.max_compute_work_group_count[0];
+    [workgroups.min(max_x), workgroups.div_ceil(max_x), 1]
+}

@@ -162,6 +162,21 @@ pub fn grazing_wall(size: (u32, u32)) -> Scene {
     scene(groups, vec![material("white", 0.7, 0.0), material("light", 0.0, 10.0)], camera, size)
 }
 
+/// `scene` on the GPU and its G-buffer at `size` (near plane 1e-3), rasterised and read back.
+pub fn raster_gbuffer(
+    device: &Arc<Device>,
+    scene: &Scene,
+    size: ImageSize,
+) -> (sensorlight::gpu_scene::GpuScene, sensorlight::passes::gbuffer::GBuffer, sensorlight::gbuffer::GBufferData) {
+    let gpu_scene = sensorlight::gpu_scene::GpuScene::upload(device, scene, None, None).unwrap();
+    let gbuffer = sensorlight::passes::gbuffer::GBufferPass::new(device, &gpu_scene)
+        .unwrap()
+        .render(device, &gpu_scene, &scene.camera, size, 1e-3)
+        .unwrap();
+    let g = gbuffer.read_back(device).unwrap();
+    (gpu_scene, gbuffer, g)
+}
+
 /// The built-in lightbox (see `scene::builtin`) at `size`.
 pub fn lightbox(size: (u32, u32)) -> Scene {
     builtin_lightbox(ImageSize { width: size.0, height: size.1 })
