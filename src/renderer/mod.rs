@@ -828,17 +828,32 @@ impl Renderer {
         })?;
         // The supersampled pixels, a slice at a time: their samples' R from their donors, the mean over each.
         let start_samples = Instant::now();
-        let everywhere = (exact_interpolation && !plan.pixels.is_empty()).then(|| {
+        let everywhere = (exact_interpolation && frame.aa == Antialiasing::On).then(|| {
             refine::visibility_everywhere(&visibility, size.width, refinement.interpolated(), |i| {
                 refinement.is_sensed(i)
             })
         });
         let light = everywhere.as_deref().map(|v| (v, refinement.hints(), bits.as_slice()));
-        let (resolved, majorities) =
-            self.resolve_supersampled(&plan, (&g, &targets), light, (bias, near), frame.background)?;
+        let offsets = (bias, near);
+        let (mut resolved, mut majorities) =
+            self.resolve_supersampled(&plan, (&g, &targets), light, offsets, frame.background)?;
+        let mut radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
+        // Then where the light ends inside a pixel, which only the light as sensed and resolved shows (with
+        // the exact light only: the samples' shadow rays place the end, `supersample::shadow`).
+        let mut plan = plan;
+        if light.is_some() {
+            let mut seen = radiance.clone();
+            for (&i, r) in plan.pixels.iter().zip(&resolved) {
+                seen[i as usize] = *r;
+            }
+            let ends = supersample::plan(&self.host, &self.bvh, &g, &supersample::light_ends(&g, &seen, &plan.pixels));
+            let (more, more_majorities) =
+                self.resolve_supersampled(&ends, (&g, &targets), light, offsets, frame.background)?;
+            (resolved, majorities) = ([resolved, more].concat(), [majorities, more_majorities].concat());
+            plan.append(ends);
+        }
         supersample_time += start_samples.elapsed();
         let image = transfer::read_buffer::<Vec4>(&device, &targets.image, pixels)?;
-        let mut radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
         // The AOVs of a supersampled pixel: R over its samples on a surface; the G-buffer's of the surface
         // most of them show.
         let mut g = g;
@@ -870,7 +885,8 @@ impl Renderer {
             start.elapsed(),
             times,
         );
-        let supersampled = plan.pixels;
+        let mut supersampled = plan.pixels;
+        supersampled.sort_unstable();
         Ok(RenderOutput { size, image, radiance, gbuffer: g, supersampled, stats })
     }
 }

@@ -18,6 +18,10 @@ pub const DEPTH_JUMP: f32 = 0.25;
 /// the pixel's scale, and its centre is its mean.
 pub const LIGHT_JUMP: f32 = 0.25;
 
+/// The light ends inside a pixel whose R is under this share of a neighbour's on its surface: a linear
+/// ramp reaching zero inside the pixel's square leaves its centre under ¼ of the next pixel's.
+pub const LIGHT_END: f32 = 0.25;
+
 /// A triangle whose smallest altitude on screen is under this many pixels may fall between pixel centres
 /// (a bar, a light seen edge-on): the pixels it touches are supersampled.
 pub const THIN_PIXELS: f32 = 1.5;
@@ -108,6 +112,36 @@ pub fn detect(scene: &Scene, g: &GBufferData, hints: &[u64], bits: &[u64]) -> Ve
         .collect()
 }
 
+/// Where the light ends inside a pixel (a penumbra's end, or a light setting below a surface's horizon),
+/// judged after sensing from every pixel's final R `radiance`: light-flags a surface pixel not in `planned`
+/// whose R's luminance is under [`LIGHT_END`] of a 4-neighbour's on its surface. Its centre sees
+/// little or none of the light while part of its square sees more: a dim pixel, so a large error relative
+/// to its own value (most of the small light's error over the whole image before), which the hints' jump
+/// misses where the light fades over more than a pixel.
+pub fn light_ends(g: &GBufferData, radiance: &[Vec4], planned: &[u32]) -> Vec<Flags> {
+    let (w, h) = (g.size.width as i64, g.size.height as i64);
+    let luminance = |i: usize| radiance[i].truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let mut taken = vec![false; g.surface.len()];
+    planned.iter().for_each(|&i| taken[i as usize] = true);
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let centre = i as usize;
+            if g.surface[centre] == NO_SURFACE || taken[centre] {
+                return Flags::default();
+            }
+            let light = [(x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)]
+                .into_iter()
+                .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+                .map(|(qx, qy)| (qy * w + qx) as usize)
+                .filter(|&j| g.surface[j] == g.surface[centre])
+                .any(|j| luminance(centre) < LIGHT_END * luminance(j));
+            Flags { geometry: false, light }
+        })
+        .collect()
+}
+
 /// The pixels a triangle thinner than [`THIN_PIXELS`] on screen touches (its footprint, conservatively: the
 /// square overlaps it) where their centre shows another surface: a sliver the centres may all miss.
 pub fn thin_footprints(scene: &Scene, g: &GBufferData) -> Vec<bool> {
@@ -163,6 +197,27 @@ fn footprint(p: [Vec2; 3], (w, h): (u32, u32)) -> Option<Vec<u32>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::ImageSize;
+
+    /// A row of five pixels: R 0, 0, 1, 1 on one surface and a bright pixel of another surface beside the
+    /// first dark one. The light ends in the second pixel only: the first's neighbours on its surface are as
+    /// dark, and another surface's light says nothing.
+    #[test]
+    fn the_light_ends_where_a_pixel_is_far_darker_than_a_neighbour_on_its_surface() {
+        let g = GBufferData {
+            size: ImageSize { width: 5, height: 1 },
+            position: vec![Vec4::ONE; 5],
+            normal: vec![Vec4::new(0.0, 1.0, 0.0, 1.0); 5],
+            albedo: vec![Vec4::ONE; 5],
+            emission: vec![Vec4::ZERO; 5],
+            surface: vec![2, 1, 1, 1, 1],
+        };
+        let r: Vec<Vec4> = [5.0, 0.0, 0.1, 1.0, 1.0].iter().map(|&v| Vec4::new(v, v, v, 1.0)).collect();
+        let ends = |planned: &[u32]| light_ends(&g, &r, planned).iter().map(|f| f.light).collect::<Vec<_>>();
+        assert_eq!(ends(&[]), [false, true, true, false, false], "0 < ¼·0.1 and 0.1 < ¼·1");
+        assert_eq!(ends(&[2]), [false, true, false, false, false], "a planned pixel is not flagged again");
+        assert!(light_ends(&g, &r, &[]).iter().all(|f| !f.geometry));
+    }
 
     #[test]
     fn a_sliver_between_centres_touches_the_pixels_it_crosses_and_a_large_triangle_is_left_to_the_centres() {

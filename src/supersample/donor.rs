@@ -7,6 +7,7 @@ use glam::Vec2;
 use rayon::prelude::*;
 
 use super::detect::Point;
+use super::shadow::ShadowPoints;
 use super::{Plan, SAMPLES};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
@@ -25,6 +26,8 @@ pub struct SubSampleLight<'a> {
     /// The light hints' points and each group's bits among them (`hints::group_bits`).
     pub points: &'a [LightPoint],
     pub bits: &'a [u64],
+    /// Points on each group that a sample casts shadow rays at where the group's light is uneven.
+    pub shadow: &'a ShadowPoints,
     /// A sensor's lift and near distance (`sensors::frame`).
     pub bias: f32,
     pub near: f32,
@@ -40,13 +43,21 @@ pub struct SubSampleLight<'a> {
 ///   between the four pixel centres around the sample that do ([`bilinear`]; the donor's where none does),
 ///   with the light hints' detail inside the pixel ([`with_hint_detail`]); else (a sliver no centre shows)
 ///   the share of the group's hint points in front of the sample that it sees, or the donor's where none
-///   is in front.
+///   is in front; but for the groups whose light is uneven around the pixel (every group where the plan
+///   flags its light, else [`uneven`]), the share of
+///   the group's light the sample sees by shadow rays, and the donor's by the same rays (`shadow`).
 pub fn sub_samples(
     g: &GBufferData,
     (plan, range, samples): (&Plan, Range<usize>, &GBufferData),
     light: Option<SubSampleLight<'_>>,
 ) -> Vec<GpuSubSample> {
     let width = g.size.width;
+    let uneven: Vec<u32> = match &light {
+        Some(l) => (range.clone())
+            .map(|n| if plan.light[n] { (1 << l.bits.len().min(MAX_GROUPS)) - 1 } else { uneven(g, l, plan.pixels[n]) })
+            .collect(),
+        None => Vec::new(),
+    };
     (0..samples.surface.len())
         .into_par_iter()
         .map(|s| {
@@ -81,10 +92,45 @@ pub fn sub_samples(
                     }
                 };
                 record.donor_visibility = donor_visibility;
+                let groups = uneven[s / SAMPLES];
+                if groups != 0 {
+                    let offsets = (l.bias, l.near);
+                    let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
+                    let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
+                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, k);
+                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, k);
+                    for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0 && traced_donor[group] >= 0.0) {
+                        record.visibility[group] = traced[group];
+                        record.donor_visibility[group] = traced_donor[group];
+                    }
+                }
             }
             record
         })
         .collect()
+}
+
+/// The light groups (a bit each) whose light is uneven around supersampled pixel `pixel` of `g`: the
+/// visibilities or the light hints' shares of its 3 × 3 neighbourhood's surface pixels differ.
+fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32) -> u32 {
+    let (w, h) = (g.size.width as i64, g.size.height as i64);
+    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
+    let around: Vec<usize> = (-1..=1)
+        .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+        .map(|(qx, qy)| (qy * w + qx) as usize)
+        .filter(|&i| g.surface[i] != NO_SURFACE)
+        .collect();
+    let differs = |value: &dyn Fn(usize) -> Visibility, group: usize| {
+        let values = around.iter().map(|&i| value(i)[group]).filter(|v| *v >= 0.0);
+        let (lo, hi) = values.fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        hi - lo > 1e-3
+    };
+    let share =
+        |i: usize| if l.hints.is_empty() { [-1.0; MAX_GROUPS] } else { hints::shares(l.bits, None, l.hints[i]) };
+    (0..l.bits.len().min(MAX_GROUPS))
+        .filter(|&group| differs(&|i| l.visibility[i], group) || differs(&share, group))
+        .fold(0, |mask, group| mask | 1 << group)
 }
 
 /// `v`, a sample's bilinear visibilities, with the detail the light hints see inside the pixel: the share of

@@ -12,9 +12,12 @@
 //!  2. cast      SAMPLES camera rays per such pixel at fixed points of its square, on the CPU's BVH; a
 //!               pixel whose samples all agree with its centre, and whose light is even, is dropped
 //!  3. donors    after sensing: each sample takes the final R of the nearest pixel on its surface, with
-//!               the light groups' exact light recomputed at the sample                       (donor.rs)
+//!               the light groups' exact light recomputed at the sample (donor.rs); where a group's light
+//!               is uneven around the pixel, its visibility there by shadow rays            (shadow.rs)
 //!  4. resolve   on the GPU after composition: the pixel is the mean of Le + Kd·R over its samples, the
 //!               background where a sample leaves the scene                (glsl/resolve.comp, resolve_cpu)
+//!  5. ends      then the pixels far darker than a neighbour on their surface, as sensed and resolved
+//!               (the light ends inside them: `light_ends`), planned and resolved the same way
 //! ```
 //!
 //! Why borrowed and not sensed: along an edge the refinement has already sensed the pixels on both sides
@@ -23,20 +26,24 @@
 //! estimator knows R's fast part in closed form: `R(s) = R(d) + Σ_g (E_g(s)·V_g(s) − E_g(d)·V_g(d))/π` at
 //! donor `d`, `E_g` a group's unoccluded irradiance (`Lights::unoccluded`), `V_g(s)` the donor's
 //! visibility shifted by the change of the share of the group's hint points (`sensors::hints`) the two
-//! points see, which moves a hard shadow's edge into the pixel. Sensing each sample instead would cost
+//! points see, which moves a hard shadow's edge into the pixel; where the group's light is uneven around
+//! the pixel, `V_g` at the sample and at the donor by the same shadow rays (a penumbra's end is a kink that
+//! interpolation between centres makes twice too bright). Sensing each sample instead would cost
 //! SAMPLES sensors per edge pixel; measured in docs/ACCURACY.md "Every pixel right".
 
 mod detect;
 mod donor;
 mod emission;
+mod shadow;
 
 use std::ops::Range;
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use detect::{Flags, detect};
+pub use detect::{Flags, detect, light_ends};
 pub use donor::{SubSampleLight, sub_samples};
+pub use shadow::{SHADOW_RAYS, ShadowPoints};
 
 use crate::gbuffer::GBufferData;
 use crate::gbuffer::cast::cast_points;
@@ -69,10 +76,13 @@ pub const SLICE: usize = 8_192;
 /// The pixels a render supersamples.
 #[derive(Clone, Debug, Default)]
 pub struct Plan {
-    /// Supersampled pixels, in increasing index.
+    /// Supersampled pixels, each once: in increasing index from [`plan`] (a second plan appended after).
     pub pixels: Vec<u32>,
     /// The mean radiance each pixel's square emits, exactly (`emission::emitted`).
     pub emission: Vec<Vec3>,
+    /// Whether each pixel's light is uneven ([`Flags::light`]): its samples cast shadow rays at every
+    /// light group (`shadow`), not only at those whose visibility differs around it.
+    pub light: Vec<bool>,
 }
 
 impl Plan {
@@ -80,6 +90,13 @@ impl Plan {
     pub fn point(&self, n: usize, k: usize, width: u32) -> Vec2 {
         let i = self.pixels[n];
         Vec2::new((i % width) as f32, (i / width) as f32) + pattern()[k]
+    }
+
+    /// `other`'s pixels (none of them in `self`) after `self`'s.
+    pub fn append(&mut self, other: Plan) {
+        self.pixels.extend(other.pixels);
+        self.emission.extend(other.emission);
+        self.light.extend(other.light);
     }
 
     /// The supersampled pixels `range` as the resolve reads them.
@@ -131,6 +148,7 @@ pub fn plan(scene: &Scene, bvh: &Bvh, g: &GBufferData, flags: &[Flags]) -> Plan 
             {
                 plan.pixels.push(i);
                 plan.emission.push(emitted[n]);
+                plan.light.push(flags[i as usize].light);
             }
         }
     }

@@ -1,0 +1,159 @@
+//! A sample's visibility of a light group by shadow rays (step 3 of `supersample`), where the group's light
+//! is uneven around the pixel.
+//!
+//! Between pixel centres a visibility is a ramp with a kink where a penumbra ends: interpolated linearly
+//! from the centres, a pixel whose centre sees none of the light but whose square reaches into the penumbra
+//! came out twice as bright as its square's mean on the small light's floor (most of that scene's error over
+//! the whole image), and the light hints' 16 points are too coarse to place the kink. Each sample of such a
+//! pixel instead casts [`SHADOW_RAYS`] rays to points on the group, and its donor the same rays, so that the
+//! sample's light differs from the donor's by what the rays see differently: where both see the same points
+//! the difference is exact. The points are interleaved over a pixel's samples ([`ShadowPoints::of_sample`]):
+//! together a pixel's samples cast [`SHADOW_RAYS`] × `SAMPLES` rays at as many points of the group.
+
+use glam::Vec3;
+
+use super::SAMPLES;
+use crate::gpu_types::MAX_GROUPS;
+use crate::light::groups::Lights;
+use crate::scene::bvh::Bvh;
+use crate::scene::{Ray, stratified_point, triangle_area};
+use crate::sensors::refine::Visibility;
+
+/// Shadow rays per light group a sample casts where the group's light is uneven around its pixel (and its
+/// donor as many). 16 × 64 samples = 1 024 points of the group per pixel: the small light's whole image
+/// 320 × 240 (direct light) measured 1.42 % with 16, against 2.43 % interpolated.
+pub const SHADOW_RAYS: usize = 16;
+
+/// A point on an emitter: where, its front normal, and its radiance's luminance (a point's weight).
+#[derive(Clone, Copy, Debug)]
+struct Point {
+    position: Vec3,
+    normal: Vec3,
+    luminance: f32,
+}
+
+/// [`SHADOW_RAYS`] × `SAMPLES` points on each light group, spread over its emitters in proportion to area
+/// (`stratified_point`). Deterministic: a render's bytes do not change.
+pub struct ShadowPoints {
+    groups: Vec<Vec<Point>>,
+}
+
+impl ShadowPoints {
+    pub fn new(lights: &Lights) -> Self {
+        let count = SHADOW_RAYS * SAMPLES;
+        let groups = (lights.groups.iter())
+            .map(|group| {
+                let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
+                let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
+                let total: f32 = areas.iter().sum();
+                if total <= 0.0 {
+                    return Vec::new();
+                }
+                (0..count)
+                    .map(|k| {
+                        let (i, u, v) = stratified_point(&areas, total, k, count);
+                        let e = &emitters[i];
+                        let (a, b) = (e.v[1] - e.v[0], e.v[2] - e.v[0]);
+                        Point {
+                            position: e.v[0] + a * u + b * v,
+                            normal: a.cross(b).normalize_or_zero(),
+                            luminance: e.ke.dot(Vec3::new(0.2126, 0.7152, 0.0722)),
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        Self { groups }
+    }
+
+    /// The points sample `k` of a pixel casts at for `group`: every `SAMPLES`-th from the `k`-th, so that
+    /// each sample's points spread over the whole group and the pixel's samples share none.
+    fn of_sample(&self, group: usize, k: usize) -> impl Iterator<Item = &Point> {
+        self.groups[group].iter().skip(k % SAMPLES).step_by(SAMPLES)
+    }
+
+    /// For each group in `groups` (a bit each), the share of its light that a sensor on the surface at `p`
+    /// facing `n` (at `p + n·bias`, seeing from `near` on) receives unoccluded, by sample `k`'s points: each
+    /// point weighs its radiance times the two cosines over the squared distance (its share of the
+    /// irradiance; the points stand for equal areas). −1 for the groups not asked, or where no point is
+    /// above the horizon and facing.
+    pub fn visibility(
+        &self,
+        bvh: &Bvh,
+        (p, n): (Vec3, Vec3),
+        (bias, near): (f32, f32),
+        groups: u32,
+        k: usize,
+    ) -> Visibility {
+        let origin = p + n * bias;
+        let mut out = [-1.0; MAX_GROUPS];
+        for (group, v) in out.iter_mut().enumerate().take(self.groups.len()) {
+            if groups & (1 << group) == 0 {
+                continue;
+            }
+            let (mut seen, mut total) = (0.0, 0.0);
+            for q in self.of_sample(group, k) {
+                let d = q.position - origin;
+                let length = d.length();
+                let weight = q.luminance * d.dot(n).max(0.0) * q.normal.dot(-d).max(0.0) / length.powi(4);
+                if weight <= 0.0 || length <= near {
+                    continue;
+                }
+                total += weight;
+                // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
+                if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
+                    seen += weight;
+                }
+            }
+            if total > 0.0 {
+                *v = seen / total;
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::ImageSize;
+    use crate::scene::builtin::lightbox;
+    use crate::sensors::frame;
+
+    /// On the light box's floor: in the open every ray sees the light, at the block's foot none, and in its
+    /// penumbra a pixel's 1 024 points agree with a dense independent quadrature of the light (a 256 × 256
+    /// grid on each emitter triangle, weighted alike) within 2 %.
+    #[test]
+    fn the_share_of_the_light_a_point_sees() {
+        let scene = lightbox(ImageSize { width: 4, height: 4 });
+        let lights = Lights::new(&scene.mesh);
+        let bvh = Bvh::build(&scene.mesh.triangles);
+        let scale = scene.mesh.scale();
+        let offsets = (frame::BIAS * scale, frame::NEAR * scale);
+        let points = ShadowPoints::new(&lights);
+        let at = |x: f32, z: f32, k: usize| points.visibility(&bvh, (Vec3::new(x, 0.0, z), Vec3::Y), offsets, 1, k)[0];
+        assert_eq!(at(-0.6, 0.5, 0), 1.0, "in the open");
+        assert_eq!(at(0.56, -0.2, 0), 0.0, "at the block's foot");
+        assert_eq!(points.visibility(&bvh, (Vec3::new(-0.6, 0.0, 0.5), Vec3::Y), offsets, 0, 0)[0], -1.0, "not asked");
+        // Over all of a pixel's samples (1 024 points), the penumbra's share.
+        let mean = (0..SAMPLES).map(|k| at(0.9, -0.2, k)).sum::<f32>() / SAMPLES as f32;
+        let (origin, n) = (Vec3::new(0.9, 0.0, -0.2) + Vec3::Y * offsets.0, Vec3::Y);
+        let (mut seen, mut total) = (0.0f64, 0.0f64);
+        let m = 256;
+        for e in &lights.emitters {
+            let normal = (e.v[1] - e.v[0]).cross(e.v[2] - e.v[0]).normalize();
+            for (i, j) in (0..m).flat_map(|i| (0..m - i).map(move |j| (i, j))) {
+                let (u, v) = ((i as f32 + 1.0 / 3.0) / m as f32, (j as f32 + 1.0 / 3.0) / m as f32);
+                let d = e.v[0] + (e.v[1] - e.v[0]) * u + (e.v[2] - e.v[0]) * v - origin;
+                let weight = (d.dot(n).max(0.0) * normal.dot(-d).max(0.0) / d.length().powi(4)) as f64;
+                total += weight;
+                if bvh.intersect(&Ray::new(origin, d), offsets.1 / d.length(), 1.0 - 1e-4).is_none() {
+                    seen += weight;
+                }
+            }
+        }
+        let dense = (seen / total) as f32;
+        assert!(dense > 0.05 && dense < 0.95, "in the penumbra: {dense}");
+        assert!((mean - dense).abs() < 0.02, "a pixel's points {mean} against the dense quadrature {dense}");
+    }
+}
