@@ -43,8 +43,8 @@ pub struct SubSampleLight<'a> {
 ///   between the four pixel centres around the sample that do ([`bilinear`]; the donor's where none does),
 ///   with the light hints' detail inside the pixel ([`with_hint_detail`]); else (a sliver no centre shows)
 ///   the share of the group's hint points in front of the sample that it sees, or the donor's where none
-///   is in front; but for the groups whose light is uneven around the pixel (every group where the plan
-///   flags its light, else [`uneven`]), the share of
+///   is in front; but for the groups whose light is uneven around the sample (every group where the plan
+///   flags the pixel's light or no centre shows the sample's surface, else [`uneven`]), the share of
 ///   the group's light the sample sees by shadow rays, and the donor's by the same rays (`shadow`).
 pub fn sub_samples(
     g: &GBufferData,
@@ -52,12 +52,6 @@ pub fn sub_samples(
     light: Option<SubSampleLight<'_>>,
 ) -> Vec<GpuSubSample> {
     let width = g.size.width;
-    let uneven: Vec<u32> = match &light {
-        Some(l) => (range.clone())
-            .map(|n| if plan.light[n] { (1 << l.bits.len().min(MAX_GROUPS)) - 1 } else { uneven(g, l, plan.pixels[n]) })
-            .collect(),
-        None => Vec::new(),
-    };
     (0..samples.surface.len())
         .into_par_iter()
         .map(|s| {
@@ -92,7 +86,8 @@ pub fn sub_samples(
                     }
                 };
                 record.donor_visibility = donor_visibility;
-                let groups = uneven[s / SAMPLES];
+                let all = (1 << l.bits.len().min(MAX_GROUPS)) - 1;
+                let groups = if plan.light[n] { all } else { uneven(g, l, plan.pixels[n], &sample).unwrap_or(all) };
                 if groups != 0 {
                     let offsets = (l.bias, l.near);
                     let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
@@ -110,17 +105,21 @@ pub fn sub_samples(
         .collect()
 }
 
-/// The light groups (a bit each) whose light is uneven around supersampled pixel `pixel` of `g`: the
-/// visibilities or the light hints' shares of its 3 × 3 neighbourhood's surface pixels differ.
-fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32) -> u32 {
+/// The light groups (a bit each) whose light is uneven around a sample of supersampled pixel `pixel` of `g`
+/// that shows `sample`: the visibilities or the light hints' shares differ between the pixels of the 3 × 3
+/// neighbourhood that show its surface alike (those its light is interpolated from); `None` where none does.
+fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32, sample: &Point) -> Option<u32> {
     let (w, h) = (g.size.width as i64, g.size.height as i64);
     let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
     let around: Vec<usize> = (-1..=1)
         .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
         .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
         .map(|(qx, qy)| (qy * w + qx) as usize)
-        .filter(|&i| g.surface[i] != NO_SURFACE)
+        .filter(|&i| Point::of(g, i).alike(sample))
         .collect();
+    if around.is_empty() {
+        return None;
+    }
     let differs = |value: &dyn Fn(usize) -> Visibility, group: usize| {
         let values = around.iter().map(|&i| value(i)[group]).filter(|v| *v >= 0.0);
         let (lo, hi) = values.fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
@@ -128,9 +127,9 @@ fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32) -> u32 {
     };
     let share =
         |i: usize| if l.hints.is_empty() { [-1.0; MAX_GROUPS] } else { hints::shares(l.bits, None, l.hints[i]) };
-    (0..l.bits.len().min(MAX_GROUPS))
-        .filter(|&group| differs(&|i| l.visibility[i], group) || differs(&share, group))
-        .fold(0, |mask, group| mask | 1 << group)
+    let groups = (0..l.bits.len().min(MAX_GROUPS))
+        .filter(|&group| differs(&|i| l.visibility[i], group) || differs(&share, group));
+    Some(groups.fold(0, |mask, group| mask | 1 << group))
 }
 
 /// `v`, a sample's bilinear visibilities, with the detail the light hints see inside the pixel: the share of
