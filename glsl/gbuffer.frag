@@ -5,7 +5,7 @@
 layout(std430, set = 0, binding = 0) readonly buffer Surfaces { GpuSurface surfaces[]; };
 
 layout(location = 0) in vec3 in_position;
-layout(location = 1) flat in vec3 in_normal;
+layout(location = 1) in vec3 in_normal;  // the corners' shading normals, interpolated
 layout(location = 2) flat in uint in_surface;
 
 layout(location = 0) out vec4 out_position;  // w = 1 where a surface is seen
@@ -17,8 +17,9 @@ layout(location = 4) out uint out_surface;
 void main() {
     GpuSurface s = surfaces[in_surface];
     bool front = gl_FrontFacing;
+    vec3 n = normalize(in_normal);
     out_position = vec4(in_position, 1.0);
-    out_normal = vec4(front ? in_normal : -in_normal, front ? 1.0 : 0.0);
+    out_normal = vec4(front ? n : -n, front ? 1.0 : 0.0);
     out_albedo = vec4(s.kd.rgb, 1.0);
     out_emission = vec4((front && s.ke.w > 0.0) ? s.ke.rgb : vec3(0.0), 1.0);
     out_surface = in_surface;

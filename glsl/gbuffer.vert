@@ -5,17 +5,18 @@
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in uint in_surface;
 
-// One unit normal per triangle (front side, CCW), pulled by triangle index: the draw is a triangle soup.
+// One shading normal per vertex of the soup (on its triangle's front side; the front normal itself on a flat
+// mesh), pulled by vertex index and interpolated across the triangle.
 layout(std430, set = 0, binding = 1) readonly buffer Normals { vec4 normals[]; };
 layout(push_constant) uniform Push { GBufferPush push; };
 
 layout(location = 0) out vec3 out_position;
-layout(location = 1) flat out vec3 out_normal;
+layout(location = 1) out vec3 out_normal;
 layout(location = 2) flat out uint out_surface;
 
 void main() {
     out_position = in_position;
-    out_normal = normals[gl_VertexIndex / 3].xyz;
+    out_normal = normals[gl_VertexIndex].xyz;
     out_surface = in_surface;
     gl_Position = push.view_proj * vec4(in_position, 1.0);
 }

@@ -22,7 +22,8 @@ use crate::vk::{Buffer, Device, transfer};
 pub struct GpuScene {
     pub vertices: Arc<Buffer>,
     pub vertex_count: u32,
-    /// One `vec4` per triangle: the front normal.
+    /// One `vec4` per vertex of the soup: its triangle's shading normal at that corner (the front normal on
+    /// a flat mesh), which the G-buffer interpolates.
     pub normals: Arc<Buffer>,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
@@ -242,7 +243,7 @@ impl GpuScene {
             }
             groups.push(GpuLightGroup { first_chunk, chunks: chunks.len() as u32 - first_chunk, _pad: [0; 2] });
         }
-        let normals: Vec<Vec4> = mesh.triangles.iter().map(|t| t.normal.extend(0.0)).collect();
+        let normals: Vec<Vec4> = mesh.corner_normals().map(|n| n.extend(0.0)).collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             vertex_count: vertices.len() as u32,
@@ -252,7 +253,7 @@ impl GpuScene {
                 &vertices,
                 vk::BufferUsageFlags::VERTEX_BUFFER | storage,
             )?),
-            normals: Arc::new(transfer::upload(device, "triangle normals", &normals, storage)?),
+            normals: Arc::new(transfer::upload(device, "corner normals", &normals, storage)?),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
             chunk_count: chunks.len() as u32,

@@ -146,6 +146,7 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
     let mesh = Mesh {
         bounds: sensorlight::scene::Aabb::of(triangles.iter().flat_map(|t| t.v)),
         triangles,
+        shading: Vec::new(),
         surfaces: vec![sensorlight::scene::Surface { name: "wall".into(), material: 0 }],
         materials: vec![sensorlight::scene::Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO }],
     };

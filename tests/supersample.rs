@@ -5,10 +5,8 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use sensorlight::light::groups::Lights;
-use sensorlight::output::compare::{Comparison, Picture, compare};
 use sensorlight::params::{Antialiasing, Overrides, RenderParams};
 use sensorlight::passes::resolve::{ResolvePass, ResolveTargets};
-use sensorlight::reference::integrator::Integrator;
 use sensorlight::reference::sampling::hash;
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::{ImageSize, Scene};
@@ -101,45 +99,6 @@ fn gpu_resolve_matches_the_cpu_twin() {
     assert!(untouched.map(|i| image[i]).all(|v| v == Vec4::splat(-1.0)), "only supersampled pixels are written");
 }
 
-/// `scene` rendered at the program's defaults with the paper's ε (0.1, an oracle without paths; 0 for
-/// direct light alone) and `--aa on`, then `off`, each against the oracle integrated over each pixel's
-/// square (`samples` each): whole image and interior.
-fn against_the_area_oracle(scene: &Scene, epsilon: f32, samples: u32) -> [Comparison; 2] {
-    let params = |aa| {
-        let flags = Overrides { epsilon: Some(epsilon), aa: Some(aa), ..Default::default() };
-        RenderParams::resolve(None, &flags).unwrap()
-    };
-    let p = params(Antialiasing::On);
-    let oracle =
-        Integrator::new(scene, p.estimator, samples, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
-    let picture = |name: &str, rgb: &[Vec4], noise: Option<&[Vec4]>| Picture {
-        name: name.into(),
-        width: scene.image.width as usize,
-        height: scene.image.height as usize,
-        rgb: rgb.iter().map(|p| [p.x, p.y, p.z]).collect(),
-        surface_id: Some(oracle.gbuffer.surface.iter().map(|&i| i as f32).collect()),
-        std_error: noise.map(|n| n.iter().map(|p| [p.x, p.y, p.z]).collect()),
-        emitter: Some(oracle.gbuffer.emission.iter().map(|e| e.truncate() != Vec3::ZERO).collect()),
-    };
-    [Antialiasing::On, Antialiasing::Off].map(|aa| {
-        let p = params(aa);
-        let setup = common::Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: None };
-        let out = common::render(scene, &setup, None);
-        let reference = picture("oracle", &oracle.image, Some(&oracle.image_std_error));
-        let c = compare(&picture("render", &out.image, None), &reference).unwrap();
-        eprintln!(
-            "aa {aa}: whole image {:.4} (own {:.4}, oracle noise {:.4}), interior {:.4} (own {:.4}); {} pixels supersampled",
-            c.whole.relative_rmse,
-            c.whole.own_error.unwrap(),
-            c.whole.reference_noise.unwrap(),
-            c.interior.relative_rmse,
-            c.interior.own_error.unwrap(),
-            out.supersampled.len()
-        );
-        c
-    })
-}
-
 /// Whole images, nothing masked, against the oracle integrated over each pixel: the shipped Cornell box
 /// (ε 0.1) and the small light's penumbrae at its own size with direct light alone (ε 0: where a penumbra
 /// ends inside a pixel, a dim pixel, is what is hard) within 1.5 %, where pixel centres alone are several
@@ -152,7 +111,7 @@ fn whole_images_within_one_and_a_half_percent_of_the_pixel_area_oracle() {
     ] {
         let mut scene = Scene::load(&common::project(file)).unwrap();
         scene.image = ImageSize { width: size.0, height: size.1 };
-        let [on, off] = against_the_area_oracle(&scene, epsilon, samples);
+        let [on, off] = common::against_the_area_oracle(&scene, epsilon, samples);
         let (own, centres) = (on.whole.own_error.unwrap(), off.whole.own_error.unwrap());
         assert!(own <= 0.015, "{file}: whole image {own:.4}");
         assert!(centres > 2.0 * own, "{file}: pixel centres alone are further: {centres:.4} against {own:.4}");
@@ -165,7 +124,7 @@ fn whole_images_within_one_and_a_half_percent_of_the_pixel_area_oracle() {
 #[test]
 fn thin_bars_and_a_light_seen_edge_on_within_three_percent() {
     let scene = common::fence((96, 64));
-    let [on, off] = against_the_area_oracle(&scene, 0.1, 1024);
+    let [on, off] = common::against_the_area_oracle(&scene, 0.1, 1024);
     let own = on.whole.own_error.unwrap();
     assert!(own <= 0.03, "whole image {own:.4}");
     assert!(off.whole.own_error.unwrap() > 2.0 * own, "pixel centres alone: {:?}", off.whole);

@@ -34,9 +34,13 @@ How each convention is matched
 * Geometry: the OBJ is parsed here (not by Mitsuba's OBJ loader, to control winding and grouping):
   `v` (first three values), `f` with `v`, `v/vt`, `v//vn`, `v/vt/vn` and negative (relative) indices,
   polygons fan-triangulated from their first vertex (as `tobj`, sensorlight's loader, does); texture
-  coordinates and normals in the file are ignored, zero-area triangles dropped. One Mitsuba mesh per
-  material, built without vertex normals and with `face_normals`, so shading uses the flat geometric
-  normal normalize((v1 − v0) × (v2 − v0)): the counter-clockwise front, as in sensorlight.
+  coordinates are ignored, zero-area triangles dropped. One Mitsuba mesh per material, its front the
+  counter-clockwise one, as in sensorlight. Shading normals as sensorlight's: a face's `vn`, normalised
+  and turned to its front's side, are the mesh's vertex normals (the mesh is a triangle soup, so a corner
+  is a vertex); a face without them takes its flat geometric normal normalize((v1 − v0) × (v2 − v0)) at
+  its corners; a material with no `vn` at all is built with `face_normals`. (sensorlight shades a whole
+  OBJ group flat where only some of its faces give `vn`, and warns; this script, which does not read
+  groups, only those faces.)
 * Materials: every `mtllib` is read (beside the OBJ as written, else by file name beside the OBJ);
   `Kd` is the albedo (0.8 grey when a material has no `Kd`, is undefined, or no `usemtl` was given,
   sensorlight's default) and `Ke` the emitted radiance (0 when absent). Every surface gets a `twosided`
@@ -122,6 +126,8 @@ class Mesh:
 
     materials: dict[str, Material] = field(default_factory=dict)
     triangles: dict[str | None, list[tuple[tuple[float, ...], ...]]] = field(default_factory=dict)
+    # Per triangle of `triangles`, its corners' shading normals, or None where the face gives none.
+    normals: dict[str | None, list[tuple[tuple[float, ...], ...] | None]] = field(default_factory=dict)
     dropped_degenerate: int = 0
     warnings: list[str] = field(default_factory=list)
 
@@ -187,11 +193,40 @@ def face_index(token: str, count: int, where: str) -> int:
     raise SceneError(f"{where}: vertex index {i} does not refer to one of the {count} defined so far")
 
 
+def normal_index(token: str, count: int, where: str) -> int | None:
+    """0-based normal index of one `f` token (`v//vn`, `v/vt/vn`), or None where it has none."""
+    parts = token.split("/")
+    if len(parts) < 3 or not parts[2]:
+        return None
+    return face_index(parts[2], count, where)
+
+
+def shading_normals(tri, given):
+    """`given` corner normals normalised and turned to the front of `tri` (its flat normal where one is
+    not a direction), as sensorlight's `surfaces::shading`."""
+    (ax, ay, az), (bx, by, bz), (cx, cy, cz) = tri
+    ux, uy, uz = bx - ax, by - ay, bz - az
+    vx, vy, vz = cx - ax, cy - ay, cz - az
+    face = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+    length = sum(f * f for f in face) ** 0.5
+    face = tuple(f / length for f in face)
+    out = []
+    for n in given:
+        norm = sum(c * c for c in n) ** 0.5
+        if not norm > 0.0 or norm == float("inf"):
+            out.append(face)
+            continue
+        n = tuple(c / norm for c in n)
+        out.append(tuple(-c for c in n) if sum(a * b for a, b in zip(n, face)) < 0.0 else n)
+    return tuple(out)
+
+
 def load_obj(path: Path) -> Mesh:
     if not path.is_file():
         raise SceneError(f"mesh {path} not found")
     mesh = Mesh()
     vertices: list[tuple[float, float, float]] = []
+    vertex_normals: list[tuple[float, float, float]] = []
     material: str | None = None
     for where, key, args in statements(path):
         if key == "v":
@@ -199,15 +234,25 @@ def load_obj(path: Path) -> Mesh:
             if len(values) not in (3, 4, 6):
                 raise SceneError(f"{where}: 'v' takes 3 coordinates (optionally w, or r g b)")
             vertices.append(tuple(values[:3]))
+        elif key == "vn":
+            values = parse_floats(args, where)
+            if len(values) != 3:
+                raise SceneError(f"{where}: 'vn' takes 3 values")
+            vertex_normals.append(tuple(values))
         elif key == "f":
             if len(args) < 3:
                 raise SceneError(f"{where}: a face needs at least 3 vertices")
             idx = [face_index(a, len(vertices), where) for a in args]
+            nidx = [normal_index(a, len(vertex_normals), where) for a in args]
             tris = mesh.triangles.setdefault(material, [])
+            normals = mesh.normals.setdefault(material, [])
             for k in range(1, len(idx) - 1):  # fan from the first vertex, as tobj triangulates
                 tri = (vertices[idx[0]], vertices[idx[k]], vertices[idx[k + 1]])
+                corners = (nidx[0], nidx[k], nidx[k + 1])
                 if triangle_area2(tri) > 0.0:
                     tris.append(tri)
+                    given = None if None in corners else tuple(vertex_normals[i] for i in corners)
+                    normals.append(None if given is None else shading_normals(tri, given))
                 else:
                     mesh.dropped_degenerate += 1
         elif key == "usemtl":
@@ -219,13 +264,18 @@ def load_obj(path: Path) -> Mesh:
                 found = find_mtl(path.parent, name, mesh)
                 if found is not None:
                     load_mtl(found, mesh.materials)
-        # g, o, s, vt, vn, l, p and the free-form statements carry nothing this renderer uses.
+        # g, o, s, vt, l, p and the free-form statements carry nothing this renderer uses.
     undefined = sorted(m for m in mesh.triangles if m is not None and m not in mesh.materials)
     for name in undefined:
         mesh.warnings.append(f"material '{name}' is not defined in any MTL file; using grey Kd {DEFAULT_KD}")
     if not any(mesh.triangles.values()):
         raise SceneError(f"{path}: the mesh contains no triangles of non-zero area")
     return mesh
+
+
+def flat_normal(tri):
+    """The unit counter-clockwise front normal of `tri`."""
+    return shading_normals(tri, [(0.0, 0.0, 0.0)])[0]
 
 
 def triangle_area2(tri) -> float:
@@ -318,8 +368,10 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
         positions = np.asarray(tris, dtype=np.float32).reshape(-1, 3)
         lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
         faces = np.arange(len(positions), dtype=np.uint32)
+        given = spec.mesh.normals.get(name, [])
+        smooth = any(n is not None for n in given)
         props = mi.Properties()
-        props["face_normals"] = True
+        props["face_normals"] = not smooth
         props["bsdf"] = mi.load_dict(
             {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(material.kd)}}}
         )
@@ -329,7 +381,7 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
             f"m{k}_{material.name}",
             vertex_count=len(positions),
             face_count=len(tris),
-            has_vertex_normals=False,
+            has_vertex_normals=smooth,
             has_vertex_texcoords=False,
             props=props,
         )
@@ -337,6 +389,10 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
         # The parameter types differ by variant (dr.scalar.ArrayXf, mi.Float, …): build each as its own type.
         params["vertex_positions"] = type(params["vertex_positions"])(positions.ravel())
         params["faces"] = type(params["faces"])(faces)
+        if smooth:
+            corners = [n if n is not None else (flat_normal(t),) * 3 for t, n in zip(tris, given)]
+            normals = np.asarray(corners, dtype=np.float32).reshape(-1, 3)
+            params["vertex_normals"] = type(params["vertex_normals"])(normals.ravel())
         params.update()
         shapes[f"m{k}"] = shape
     eye = np.asarray(spec.eye, dtype=np.float64)

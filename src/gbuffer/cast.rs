@@ -28,10 +28,12 @@ pub fn first_surface(scene: &Scene, bvh: &Bvh, ray: &Ray) -> Option<Visible> {
     let tri = &scene.mesh.triangles[hit.triangle as usize];
     let material = scene.mesh.material_of(tri.surface);
     let front = ray.dir.dot(tri.normal) < 0.0;
-    let normal = if front { tri.normal } else { -tri.normal };
+    let position = ray.at(hit.t);
+    let shading = scene.mesh.shading_normal(hit.triangle as usize, position);
+    let normal = if front { shading } else { -shading };
     let emission = if front && material.is_emitter() { material.ke } else { glam::Vec3::ZERO };
     Some(Visible {
-        position: ray.at(hit.t).extend(1.0),
+        position: position.extend(1.0),
         normal: normal.extend(if front { 1.0 } else { 0.0 }),
         albedo: material.kd.extend(1.0),
         emission: emission.extend(1.0),

@@ -4,7 +4,8 @@
 //! leaving the surface `x₁` it hits, `Le(x₁) + Kd(x₁)·R(x₁)`, and `R(x₁)` is the same integral one vertex
 //! further on: a path. At every vertex `x_k` (k ≥ 1):
 //!
-//! - the normal is turned towards the ray that arrived (every surface reflects on both sides), and the
+//! - the normal (the shading normal, `Mesh::shading_normal`) is turned towards the side the ray arrived on
+//!   (every surface reflects on both sides), and the
 //!   vertex's rays leave from it lifted by the sensor's bias and are blind to the near distance, as at `p`
 //!   (`sensors::frame`), so a vertex in a corner sees the room and not the seam;
 //! - next-event estimation: a point on an emitter (by power), MIS-weighted (power heuristic) against
@@ -105,8 +106,10 @@ impl Integrator<'_> {
             if !(beta.max_element() > 0.0 && beta.max_element() <= MAX_THROUGHPUT) {
                 return radiance; // black (nothing more to add) or past the cap (module docs)
             }
-            let normal = if cos_light > 0.0 { tri.normal } else { -tri.normal };
-            let frame = SensorFrame::new(ray.at(hit.t), normal, self.bias);
+            let at = ray.at(hit.t);
+            let shading = self.scene.mesh.shading_normal(hit.triangle as usize, at);
+            let normal = if cos_light > 0.0 { shading } else { -shading };
+            let frame = SensorFrame::new(at, normal, self.bias);
             if let Some(lights) = &self.lights {
                 radiance += beta * self.light_sample(&frame, lights, u.light, None, rays);
             }

@@ -21,7 +21,7 @@ pub fn from_groups(
 ) -> Scene {
     let groups: Vec<ObjGroup> = groups
         .into_iter()
-        .map(|(name, material, triangles)| ObjGroup { name: name.into(), material, triangles })
+        .map(|(name, material, triangles)| ObjGroup { name: name.into(), material, triangles, normals: Vec::new() })
         .collect();
     let mut warnings = Vec::new();
     let mesh = Mesh::new(&groups, materials, &mut warnings).expect("built-in scenes have triangles");

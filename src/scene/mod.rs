@@ -101,6 +101,9 @@ impl Aabb {
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub triangles: Vec<Triangle>,
+    /// Each triangle's corners' shading normals (unit, on its front's side), interpolated across it for
+    /// shading ([`Mesh::shading_normal`]); empty where the mesh gives none: flat, the front normal.
+    pub shading: Vec<[Vec3; 3]>,
     /// Indexed by `SurfaceId - 1`.
     pub surfaces: Vec<Surface>,
     pub materials: Vec<Material>,
@@ -111,7 +114,7 @@ impl Mesh {
     /// Builds the mesh from groups of triangles, dropping degenerate ones and assigning surface ids.
     /// `warnings` receives what was dropped.
     pub fn new(groups: &[obj::ObjGroup], materials: Vec<Material>, warnings: &mut Vec<String>) -> Result<Self> {
-        let (triangles, surfaces, dropped) = surfaces::assign(groups, &materials);
+        let (triangles, shading, surfaces, dropped) = surfaces::assign(groups, &materials);
         if let Some((group, v)) = &dropped.first_overflowing {
             bail!(
                 "{} triangle(s) too large for 32-bit floats: their area overflows (the first, in group '{group}': \
@@ -142,7 +145,22 @@ impl Mesh {
             bounds.min,
             bounds.max
         );
-        Ok(Self { triangles, surfaces, materials, bounds })
+        Ok(Self { triangles, shading, surfaces, materials, bounds })
+    }
+
+    /// The shading normal at `p` on triangle `triangle` (front side): the corners' shading normals
+    /// interpolated by `p`'s barycentric coordinates and normalised; the front normal on a flat mesh.
+    pub fn shading_normal(&self, triangle: usize, p: Vec3) -> Vec3 {
+        let t = &self.triangles[triangle];
+        let Some(corners) = self.shading.get(triangle) else { return t.normal };
+        let [b0, b1, b2] = barycentric(&t.v, p);
+        (corners[0] * b0 + corners[1] * b1 + corners[2] * b2).try_normalize().unwrap_or(t.normal)
+    }
+
+    /// Each corner's shading normal of every triangle, three per triangle in order: what the G-buffer
+    /// interpolates (the front normal thrice on a flat mesh).
+    pub fn corner_normals(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (self.triangles.iter().enumerate()).flat_map(|(i, t)| self.shading.get(i).copied().unwrap_or([t.normal; 3]))
     }
 
     /// Warnings about the light in the scene, each naming what it is about: no surface emits (the image is
@@ -264,6 +282,22 @@ impl Scene {
 }
 
 /// The area of triangle `v`.
+/// The barycentric coordinates of `p` (on or near the triangle `v`'s plane), each clamped to the
+/// triangle so that a point just off an edge takes the edge's.
+pub fn barycentric(v: &[Vec3; 3], p: Vec3) -> [f32; 3] {
+    let (e1, e2, d) = (v[1] - v[0], v[2] - v[0], p - v[0]);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let (b1, b2) = ((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det);
+    let b = [1.0 - b1 - b2, b1, b2].map(|x| x.max(0.0));
+    let sum = b[0] + b[1] + b[2];
+    b.map(|x| x / sum)
+}
+
 pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
     0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
 }

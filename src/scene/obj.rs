@@ -52,11 +52,15 @@ impl Material {
 }
 
 /// One polygon soup group as the file defines it: a `g`/`o` name and one material.
+#[derive(Clone, Debug)]
 pub struct ObjGroup {
     pub name: String,
     pub material: usize,
     /// Triangles, fan-triangulated from the file's polygons, in file order.
     pub triangles: Vec<[Vec3; 3]>,
+    /// Each triangle's corners' shading normals (`vn`, as the file gives them), or empty where some face of
+    /// the group gives none: then it is shaded flat.
+    pub normals: Vec<[Vec3; 3]>,
 }
 
 pub struct ObjData {
@@ -68,6 +72,9 @@ pub struct ObjData {
 }
 
 /// OBJ statements that are valid but carry nothing this renderer uses (free-form geometry, display hints).
+/// tobj's name for the faces before any `g` or `o` (and for a bare one).
+const UNNAMED_GROUP: &str = "unnamed_object";
+
 const IGNORED_STATEMENTS: &[&str] = &[
     "vp",
     "cstype",
@@ -150,14 +157,32 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let default_material = materials.len();
     materials.push(Material { name: "(default grey)".into(), kd: Vec3::splat(Material::DEFAULT_KD), ke: Vec3::ZERO });
 
+    for name in checked.with_normals.intersection(&checked.without_normals) {
+        warnings.push(format!(
+            "{}: group '{name}': some faces have normals ('vn') and some do not; shading it flat",
+            path.display()
+        ));
+    }
     let groups = models
         .into_iter()
         .map(|model| {
-            let p = &model.mesh.positions;
-            let vertex = |i: u32| Vec3::new(p[3 * i as usize], p[3 * i as usize + 1], p[3 * i as usize + 2]);
-            let triangles =
-                model.mesh.indices.chunks_exact(3).map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])]).collect();
-            ObjGroup { name: model.name, material: model.mesh.material_id.unwrap_or(default_material), triangles }
+            let m = &model.mesh;
+            let at = |values: &[f32], i: u32| {
+                let i = 3 * i as usize;
+                Vec3::new(values[i], values[i + 1], values[i + 2])
+            };
+            let corners = |values: &[f32], t: &[u32]| [at(values, t[0]), at(values, t[1]), at(values, t[2])];
+            let triangles = m.indices.chunks_exact(3).map(|t| corners(&m.positions, t)).collect();
+            // Where a face names no normal, tobj makes one up from the previous corner's: such a group is
+            // shaded flat (the checking pass found it).
+            let smooth = m.normal_indices.len() == m.indices.len()
+                && !m.normal_indices.is_empty()
+                && !checked.without_normals.contains(&model.name);
+            let normals = match smooth {
+                true => m.normal_indices.chunks_exact(3).map(|t| corners(&m.normals, t)).collect(),
+                false => Vec::new(),
+            };
+            ObjGroup { name: model.name, material: m.material_id.unwrap_or(default_material), triangles, normals }
         })
         .collect();
     Ok(ObjData { groups, materials, warnings, files: files.into_inner() })
@@ -205,12 +230,17 @@ struct CheckedObj {
     text: String,
     /// Material names used by `usemtl`, with the first line using each.
     used_materials: Vec<(String, usize)>,
+    /// Groups (by the name tobj gives them) with a face that names normals, and with one that does not.
+    with_normals: BTreeSet<String>,
+    without_normals: BTreeSet<String>,
 }
 
 fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<CheckedObj, LoadError> {
     let mut out = String::with_capacity(text.len());
     let mut used_materials: Vec<(String, usize)> = Vec::new();
     let mut counts = [0usize; 3]; // v, vt, vn seen so far
+    let mut group = String::from(UNNAMED_GROUP);
+    let (mut with_normals, mut without_normals) = (BTreeSet::new(), BTreeSet::new());
     let mut ignored = BTreeSet::new();
     let mut stray_dots: Vec<(usize, String)> = Vec::new();
     for (index, raw) in text.lines().enumerate() {
@@ -286,8 +316,12 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                     };
                     return Err(err(format!("{what} needs at least {least} vertices, found {}", args.len())));
                 }
-                for vertex in args {
+                for vertex in args.iter() {
                     check_face_vertex(vertex, &counts).map_err(|m| err(format!("face vertex '{vertex}': {m}")))?;
+                }
+                if keyword == "f" {
+                    let named = args.iter().all(|v| v.split('/').nth(2).is_some_and(|n| !n.is_empty()));
+                    if named { &mut with_normals } else { &mut without_normals }.insert(group.clone());
                 }
                 if keyword != "f" {
                     // Checked, then dropped: lines and points have no area to light.
@@ -310,7 +344,11 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                     return Err(err("'mtllib' needs a file name".into()));
                 }
             }
-            "o" | "g" | "s" => {}
+            "o" | "g" => {
+                // As tobj names its models: the rest of the line.
+                group = if st.rest.is_empty() { UNNAMED_GROUP.to_owned() } else { st.rest.to_owned() };
+            }
+            "s" => {}
             other if IGNORED_STATEMENTS.contains(&other) => {
                 ignored.insert(other.to_owned());
                 out.push('\n');
@@ -329,7 +367,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
             ignored.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    Ok(CheckedObj { text: out, used_materials })
+    Ok(CheckedObj { text: out, used_materials, with_normals, without_normals })
 }
 
 fn parse_numbers<'a>(args: &[&'a str]) -> Result<Vec<f32>, &'a str> {
@@ -539,6 +577,22 @@ mod tests {
             warnings.iter().any(|w| w.ends_with("mesh.obj: 4 more numbers followed by a stray '.' read without it"))
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Each corner takes the normal its `f` token names; a group where some faces give none is flat, and
+    /// said so.
+    #[test]
+    fn shading_normals_follow_the_faces_normal_indices() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvn 0.6 0 0.8\n\
+                   g smooth\nf 1//1 2//2 3//1\ng mixed\nf 1//1 2//1 3//1\nf 2 4 3\ng flat\nf 1 2 3\n";
+        let dir = files("shading-normals", &[("mesh.obj", obj)]);
+        let data = load(&dir.join("mesh.obj")).unwrap();
+        let group = |name: &str| data.groups.iter().find(|g| g.name == name).unwrap();
+        assert_eq!(group("smooth").normals, [[Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::Z]]);
+        assert!(group("mixed").normals.is_empty(), "flat: one of its two faces gives no normals");
+        assert!(group("flat").normals.is_empty());
+        let said: Vec<&String> = data.warnings.iter().filter(|w| w.contains("shading it flat")).collect();
+        assert!(said.len() == 1 && said[0].contains("'mixed'"), "{:?}", data.warnings);
     }
 
     #[test]

@@ -23,18 +23,26 @@ pub struct Dropped {
     pub first_overflowing: Option<(String, [Vec3; 3])>,
 }
 
-/// Returns the triangles with area, with their surface ids, the surfaces, and what was left out.
-pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<Surface>, Dropped) {
+/// Returns the triangles with area, with their surface ids; their corners' shading normals ([`shading`];
+/// empty where no group has any); the surfaces; and what was left out.
+pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<[Vec3; 3]>, Vec<Surface>, Dropped) {
     let mut triangles = Vec::with_capacity(groups.iter().map(|g| g.triangles.len()).sum());
+    let smooth = groups.iter().any(|g| !g.normals.is_empty());
+    let mut normals = Vec::with_capacity(if smooth { triangles.capacity() } else { 0 });
     let mut surfaces = Vec::new();
     let mut dropped = Dropped::default();
     let cos_crease = CREASE_DEG.to_radians().cos();
 
     for group in groups {
         let mut local: Vec<([Vec3; 3], Vec3)> = Vec::with_capacity(group.triangles.len());
-        for &v in &group.triangles {
+        for (k, &v) in group.triangles.iter().enumerate() {
             match face_normal(v) {
-                Shape::Normal(n) => local.push((v, n)),
+                Shape::Normal(n) => {
+                    local.push((v, n));
+                    if smooth {
+                        normals.push(shading(group.normals.get(k), n));
+                    }
+                }
                 Shape::Degenerate => dropped.degenerate += 1,
                 Shape::Overflow => {
                     dropped.overflowing += 1;
@@ -88,7 +96,20 @@ pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Ve
             };
         }
     }
-    (triangles, surfaces, dropped)
+    (triangles, normals, surfaces, dropped)
+}
+
+/// A triangle's corners' shading normals from the file's (`given`, if any) and its front normal `face`: each
+/// unit length and on the front's side (negated where the file's points behind it: the G-buffer turns the
+/// normal towards the camera by the front side); the front normal where none is given or one is not a
+/// direction.
+pub fn shading(given: Option<&[Vec3; 3]>, face: Vec3) -> [Vec3; 3] {
+    let Some(given) = given else { return [face; 3] };
+    given.map(|n| match n.try_normalize() {
+        Some(n) if n.dot(face) < 0.0 => -n,
+        Some(n) => n,
+        None => face,
+    })
 }
 
 /// A triangle's shape as f32 arithmetic sees it.
@@ -199,14 +220,40 @@ mod tests {
         let o = Vec3::ZERO;
         let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
-        let groups = [ObjGroup { name: "box".into(), material: 0, triangles }];
+        let groups = [ObjGroup { name: "box".into(), material: 0, triangles, normals: Vec::new() }];
         let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, surfaces, dropped) = assign(&groups, &materials);
+        let (tris, _, surfaces, dropped) = assign(&groups, &materials);
         assert_eq!(dropped, Dropped::default());
         assert_eq!(surfaces.len(), 2);
         let ids: Vec<_> = tris.iter().map(|t| t.surface).collect();
         assert_eq!(ids, [1, 1, 2, 2]);
         assert_eq!(surfaces[0].name, "box/m#0");
+    }
+
+    /// The file's normals are made unit and turned to the front's side; one that is not a direction (zero)
+    /// and a triangle without any take the front normal.
+    #[test]
+    fn shading_normals_are_unit_and_on_the_front() {
+        let given = [Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.6, -0.8), Vec3::ZERO];
+        assert_eq!(shading(Some(&given), Vec3::Z), [Vec3::Z, Vec3::new(0.0, -0.6, 0.8), Vec3::Z]);
+        assert_eq!(shading(None, Vec3::X), [Vec3::X; 3]);
+        // Through `assign`: only where some group gives normals, and one per kept triangle.
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
+        let flat = [ObjGroup { name: "f".into(), material: 0, triangles: vec![[a, b, c]], normals: Vec::new() }];
+        assert!(assign(&flat, &materials).1.is_empty());
+        let smooth = [
+            ObjGroup {
+                name: "s".into(),
+                material: 0,
+                triangles: vec![[a, b, b], [a, b, c]],
+                normals: vec![[c; 3], given],
+            },
+            flat[0].clone(),
+        ];
+        let (triangles, normals, _, _) = assign(&smooth, &materials);
+        assert_eq!(triangles.len(), 2, "the degenerate one dropped");
+        assert_eq!(normals, [[Vec3::Z, Vec3::new(0.0, -0.6, 0.8), Vec3::Z], [Vec3::Z; 3]]);
     }
 
     #[test]
@@ -221,9 +268,9 @@ mod tests {
         // A fin: two coplanar triangles and a third at 90°, all on the edge o–x.
         let (o, x) = (Vec3::ZERO, Vec3::X);
         let triangles = vec![[o, x, Vec3::Z], [x, o, -Vec3::Z], [o, x, Vec3::Y]];
-        let groups = [ObjGroup { name: "fin".into(), material: 0, triangles }];
+        let groups = [ObjGroup { name: "fin".into(), material: 0, triangles, normals: Vec::new() }];
         let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, surfaces, _) = assign(&groups, &materials);
+        let (tris, _, surfaces, _) = assign(&groups, &materials);
         assert_eq!(surfaces.len(), 2);
         assert_eq!(tris.iter().map(|t| t.surface).collect::<Vec<_>>(), [1, 1, 2]);
     }
@@ -234,9 +281,10 @@ mod tests {
             name: "g".into(),
             material: 0,
             triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],
+            normals: Vec::new(),
         }];
         let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, surfaces, dropped) = assign(&groups, &materials);
+        let (tris, _, surfaces, dropped) = assign(&groups, &materials);
         assert_eq!((tris.len(), surfaces.len(), dropped.degenerate), (1, 1, 1));
         assert!((tris[0].normal - Vec3::Z).length() < 1e-6);
     }

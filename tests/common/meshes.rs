@@ -49,9 +49,9 @@ pub fn scene() -> Mesh {
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down
     let groups = [
-        ObjGroup { name: "ball".into(), material: 0, triangles: sphere(Vec3::ZERO, 1.0, 64) },
-        ObjGroup { name: "floor".into(), material: 0, triangles: plane(-1.5, 48) },
-        ObjGroup { name: "lamp".into(), material: 1, triangles: lamp },
+        ObjGroup { name: "ball".into(), material: 0, triangles: sphere(Vec3::ZERO, 1.0, 64), normals: Vec::new() },
+        ObjGroup { name: "floor".into(), material: 0, triangles: plane(-1.5, 48), normals: Vec::new() },
+        ObjGroup { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new() },
     ];
     Mesh::new(&groups, materials, &mut Vec::new()).unwrap()
 }

@@ -66,8 +66,10 @@ pub fn project(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
-use glam::Vec3;
-use sensorlight::params::{EstimatorParams, FrameParams, Indirect};
+use glam::{Vec3, Vec4};
+use sensorlight::output::compare::{Comparison, Picture, compare};
+use sensorlight::params::{Antialiasing, EstimatorParams, FrameParams, Indirect, Overrides, RenderParams};
+use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{CacheConfig, Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
 use sensorlight::scene::obj::Material;
@@ -211,5 +213,44 @@ pub fn render(scene: &Scene, setup: &Setup, budget: Option<u64>) -> RenderOutput
             .build_unchecked(StrategyKind::default())
             .unwrap();
         renderer.render(scene.image, &setup.frame, &Quiet).unwrap()
+    })
+}
+
+/// `scene` rendered at the program's defaults with the paper's ε (0.1, an oracle without paths; 0 for
+/// direct light alone) and `--aa on`, then `off`, each against the oracle integrated over each pixel's
+/// square (`samples` each): whole image and interior.
+pub fn against_the_area_oracle(scene: &Scene, epsilon: f32, samples: u32) -> [Comparison; 2] {
+    let params = |aa| {
+        let flags = Overrides { epsilon: Some(epsilon), aa: Some(aa), ..Default::default() };
+        RenderParams::resolve(None, &flags).unwrap()
+    };
+    let p = params(Antialiasing::On);
+    let oracle =
+        Integrator::new(scene, p.estimator, samples, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
+    let picture = |name: &str, rgb: &[Vec4], noise: Option<&[Vec4]>| Picture {
+        name: name.into(),
+        width: scene.image.width as usize,
+        height: scene.image.height as usize,
+        rgb: rgb.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        surface_id: Some(oracle.gbuffer.surface.iter().map(|&i| i as f32).collect()),
+        std_error: noise.map(|n| n.iter().map(|p| [p.x, p.y, p.z]).collect()),
+        emitter: Some(oracle.gbuffer.emission.iter().map(|e| e.truncate() != Vec3::ZERO).collect()),
+    };
+    [Antialiasing::On, Antialiasing::Off].map(|aa| {
+        let p = params(aa);
+        let setup = Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: None };
+        let out = render(scene, &setup, None);
+        let reference = picture("oracle", &oracle.image, Some(&oracle.image_std_error));
+        let c = compare(&picture("render", &out.image, None), &reference).unwrap();
+        eprintln!(
+            "aa {aa}: whole image {:.4} (own {:.4}, oracle noise {:.4}), interior {:.4} (own {:.4}); {} pixels supersampled",
+            c.whole.relative_rmse,
+            c.whole.own_error.unwrap(),
+            c.whole.reference_noise.unwrap(),
+            c.interior.relative_rmse,
+            c.interior.own_error.unwrap(),
+            out.supersampled.len()
+        );
+        c
     })
 }
