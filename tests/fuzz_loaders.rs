@@ -1,4 +1,5 @@
-//! Fuzzing the scene loaders: the scene TOML, the OBJ and the MTL, with arbitrary and mutated-valid inputs.
+//! Fuzzing the scene loaders: the scene TOML, the OBJ and the MTL, glTF (`.gltf` and `.glb`), with arbitrary
+//! and mutated-valid inputs.
 //!
 //! Properties, for every input: loading never panics and ends within [`DEADLINE`]; an error names the file
 //! it is about (scene, mesh or material library), and where the loader gives a line, that line exists in that
@@ -109,10 +110,16 @@ impl Files {
             }
         }
         if let Some(at) = message.find("at line ") {
-            // toml's own position: a line of the scene file.
+            // A parser's own position: toml's in the scene file, or serde_json's in a glTF file it names.
             let line: usize = message[at + 8..].split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap();
-            let lines = self.written.iter().find(|(p, _)| p.ends_with("scene.toml")).unwrap().1.lines().count();
-            prop_assert!(line >= 1 && line <= lines.max(1), "TOML line {line} of {lines}: {message}");
+            let gltf = self.written.iter().find(|(p, _)| p.extension().is_some_and(|e| e == "gltf" || e == "glb"));
+            // serde_json puts an unexpected end one line past a final newline.
+            let (what, text, past) = match gltf.filter(|(p, _)| message.contains(&p.display().to_string())) {
+                Some((_, text)) => ("glTF", text, text.ends_with('\n') as usize),
+                None => ("TOML", &self.written.iter().find(|(p, _)| p.ends_with("scene.toml")).unwrap().1, 0),
+            };
+            let lines = text.lines().count() + past;
+            prop_assert!(line >= 1 && line <= lines.max(1), "{what} line {line} of {lines}: {message}");
         }
         Ok(())
     }
@@ -217,6 +224,25 @@ const OBJ_KEYWORDS: &[&str] = &[
 const MTL_KEYWORDS: &[&str] = &[
     "newmtl", "newmtl", "Kd", "Kd", "Ke", "Ke", "Ka", "Ks", "Ns", "Ni", "d", "Tr", "Tf", "illum", "map_Kd", "map_Ka",
     "map_Ks", "map_Bump", "map_bump", "bump", "map_d", "map_Ns", "refl", "#",
+];
+
+/// Lines of glTF JSON to insert: values that are out of range, of the wrong type, or that loop.
+const GLTF_LINES: &[&str] = &[
+    "\"mode\": 0,",
+    "\"mode\": 5,",
+    "\"count\": 99999,",
+    "\"byteOffset\": 7,",
+    "\"scale\": [0, 0, 0],",
+    "\"matrix\": [1e39, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1],",
+    "\"children\": [0, 0],",
+    "\"indices\": 3,",
+    "\"camera\": 0,",
+    "\"yfov\": 0,",
+    "\"emissiveFactor\": [1e30, 1, 1],",
+    "{",
+    "}",
+    "[",
+    "],",
 ];
 
 /// An OBJ of generated lines, often after a valid quad (so that some load), with a BOM now and then.
@@ -476,6 +502,32 @@ proptest! {
         Files::new(&dir).write("CornellBox-Original.mtl", mtl.as_bytes())
             .write("CornellBox-Original.obj", obj.as_bytes())
             .scene(&shipped("scenes/cornell-mcguire/cornell-mcguire.toml")).check()?;
+    }
+
+    /// The glTF test asset (`.gltf` JSON, one value per line, and its `.bin`) with a few edits of its lines.
+    #[test]
+    fn mutated_gltf(edits in proptest::collection::vec(edit(GLTF_LINES), 1..4)) {
+        let dir = scratch("gltf");
+        let text = apply(&std::fs::read_to_string(common::gltf::write_gltf(&dir, "mesh")).unwrap(), &edits);
+        Files::new(&dir).write("mesh.gltf", text.as_bytes()).scene(&format!("mesh = \"mesh.gltf\"\n{CAMERA}")).check()?;
+    }
+
+    /// The `.glb` with bytes changed, and cut short now and then.
+    #[test]
+    fn mutated_glb(
+        changes in proptest::collection::vec((0usize..100_000, any::<u8>()), 0..6),
+        cut in proptest::option::of(0.0f64..1.0),
+    ) {
+        let dir = scratch("glb");
+        let mut bytes = std::fs::read(common::gltf::write_glb(&dir, "mesh", &[])).unwrap();
+        for (at, byte) in changes {
+            let n = bytes.len();
+            bytes[at % n] = byte;
+        }
+        if let Some(f) = cut {
+            bytes.truncate((bytes.len() as f64 * f) as usize);
+        }
+        Files::new(&dir).write("mesh.glb", &bytes).scene(&format!("mesh = \"mesh.glb\"\n{CAMERA}")).check()?;
     }
 
     /// Scene files: valid ones with values replaced or keys added, cut short, or anything.

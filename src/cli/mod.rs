@@ -85,11 +85,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
 
 /// Loads the scene file at `path` and prints its warnings. A mesh given instead is told how to get a scene.
 fn load_scene_file(path: &Path) -> Result<Scene> {
-    if FileKind::of(path) == FileKind::ObjMesh {
+    let kind = FileKind::of(path);
+    if kind.is_mesh() {
         bail!(
-            "{} is an OBJ mesh; this command needs a scene file (TOML). `sensorlight render {} -o out.exr \
+            "{} is {}; this command needs a scene file (TOML). `sensorlight render {} -o out.exr \
              --write-scene SCENE.toml` writes one, with a camera that frames the mesh",
             path.display(),
+            kind.describe(),
             path.display()
         );
     }
@@ -130,7 +132,7 @@ fn load_input(
 ) -> Result<(Scene, RenderParams)> {
     match FileKind::of(path) {
         FileKind::Scene => load_scene(path, flags),
-        FileKind::ObjMesh => {
+        FileKind::ObjMesh | FileKind::GltfMesh => {
             let default = auto_camera::DEFAULT_IMAGE;
             let size = ImageSize {
                 // Zero is refused by the flags' own check, with the flag's name.
@@ -299,7 +301,7 @@ fn gbuffer_aovs(exr: ExrImage, g: &GBufferData, eye: glam::Vec3) -> ExrImage {
 /// so that a dim mesh's PNG is not black; a scene file without one keeps the default.
 fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, bool) {
     use sensorlight::params::{Origin, Param};
-    if FileKind::of(input) != FileKind::ObjMesh || params.origin(Param::Exposure) != Origin::Default {
+    if !FileKind::of(input).is_mesh() || params.origin(Param::Exposure) != Origin::Default {
         return (params.exposure, false);
     }
     let lit = (image.iter().zip(&g.surface).zip(&g.emission))

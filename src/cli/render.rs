@@ -200,7 +200,7 @@ fn black_image_warning(image: &[glam::Vec4], scene: &Scene, params: &RenderParam
     let target = c.eye + c.forward * (scene.mesh.bounds.center() - c.eye).length().max(0.1 * scene.mesh.scale());
     let why = if light > 0.0 { "no lit surface is in view" } else { "nothing emits light and the background is black" };
     let fix = match sensorlight::scene::FileKind::of(input) {
-        sensorlight::scene::FileKind::ObjMesh => {
+        sensorlight::scene::FileKind::ObjMesh | sensorlight::scene::FileKind::GltfMesh => {
             "write the scene with --write-scene, move the camera (or set [render] background) and render the scene \
              file"
         }

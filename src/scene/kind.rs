@@ -9,6 +9,8 @@ pub enum FileKind {
     /// A scene file (TOML): anything not recognised as another kind.
     Scene,
     ObjMesh,
+    /// glTF 2.0: `.gltf` (JSON) or `.glb` (binary).
+    GltfMesh,
     MtlLibrary,
     Exr,
     Png,
@@ -36,6 +38,9 @@ impl FileKind {
         if head.starts_with(b"\x89PNG\r\n\x1a\n") {
             return Some(Self::Png);
         }
+        if head.starts_with(b"glTF") {
+            return Some(Self::GltfMesh);
+        }
         // The head may end inside a UTF-8 sequence: judge the valid prefix.
         let text = match std::str::from_utf8(head) {
             Ok(text) => text,
@@ -59,6 +64,7 @@ impl FileKind {
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("obj") => Self::ObjMesh,
+            Some("gltf" | "glb") => Self::GltfMesh,
             Some("mtl") => Self::MtlLibrary,
             Some("exr") => Self::Exr,
             Some("png") => Self::Png,
@@ -66,11 +72,17 @@ impl FileKind {
         }
     }
 
+    /// Whether it is a mesh `render` takes alone (the camera then frames it).
+    pub fn is_mesh(self) -> bool {
+        matches!(self, Self::ObjMesh | Self::GltfMesh)
+    }
+
     /// What it is, for messages: "an OBJ mesh".
     pub fn describe(self) -> &'static str {
         match self {
             Self::Scene => "a scene file (TOML)",
             Self::ObjMesh => "an OBJ mesh",
+            Self::GltfMesh => "a glTF mesh",
             Self::MtlLibrary => "an MTL material library",
             Self::Exr => "an OpenEXR image",
             Self::Png => "a PNG image",
@@ -93,6 +105,8 @@ mod tests {
         assert_eq!(FileKind::sniff(b"mesh = \"a.obj\"\n[camera]\n"), None);
         assert_eq!(FileKind::sniff(b"\xff\xfe\x00binary"), Some(FileKind::Binary));
         assert_eq!(FileKind::by_extension(Path::new("a/b.OBJ")), FileKind::ObjMesh);
+        assert_eq!(FileKind::by_extension(Path::new("a/b.gltf")), FileKind::GltfMesh);
+        assert_eq!(FileKind::sniff(b"glTF\x02\x00\x00\x00"), Some(FileKind::GltfMesh));
         assert_eq!(FileKind::by_extension(Path::new("scene.toml")), FileKind::Scene);
     }
 }

@@ -6,6 +6,7 @@ pub mod builtin;
 pub mod bvh;
 pub mod camera;
 pub mod file;
+pub mod gltf;
 pub mod kind;
 pub mod obj;
 pub mod ray;
@@ -259,7 +260,7 @@ impl Scene {
             path.display()
         );
         let mesh_path = file.mesh_path(path);
-        let obj = obj::load(&mesh_path)?;
+        let (obj, _) = read_mesh(&mesh_path)?;
         let mut warnings = obj.warnings;
         let mesh =
             Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
@@ -281,7 +282,15 @@ impl Scene {
     }
 }
 
-/// The area of triangle `v`.
+/// The groups and materials of the mesh file at `path`, by its kind (glTF, else OBJ), and a glTF's first
+/// camera.
+fn read_mesh(path: &Path) -> Result<(obj::ObjData, Option<Camera>)> {
+    match FileKind::of(path) {
+        FileKind::GltfMesh => gltf::load(path).map(|g| (g.mesh, g.camera)),
+        _ => Ok((obj::load(path)?, None)),
+    }
+}
+
 /// The barycentric coordinates of `p` (on or near the triangle `v`'s plane), each clamped to the
 /// triangle so that a point just off an edge takes the edge's.
 pub fn barycentric(v: &[Vec3; 3], p: Vec3) -> [f32; 3] {
@@ -298,6 +307,7 @@ pub fn barycentric(v: &[Vec3; 3], p: Vec3) -> [f32; 3] {
     b.map(|x| x / sum)
 }
 
+/// The area of triangle `v`.
 pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
     0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
 }
@@ -320,16 +330,18 @@ pub fn stratified_point(areas: &[f32], total: f32, k: usize, count: usize) -> (u
 }
 
 impl Scene {
-    /// A scene of the OBJ mesh at `path` alone: the camera frames it ([`auto_camera`]), the image is `image`,
-    /// and the `[render]` table is empty (the defaults).
+    /// A scene of the mesh at `path` alone (OBJ or glTF): the glTF's first camera, else one that frames it
+    /// ([`auto_camera`]); the image is `image`, and the `[render]` table is empty (the defaults).
     pub fn from_mesh(path: &Path, image: ImageSize) -> Result<Self> {
         ensure!(image.width >= 1 && image.height >= 1, "image width and height must be at least 1");
-        let obj = obj::load(path)?;
+        let (obj, file_camera) = read_mesh(path)?;
         let mut warnings = obj.warnings;
         let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
-        let (camera, placement) =
-            auto_camera::for_mesh(&mesh, image).with_context(|| format!("{}: camera", path.display()))?;
+        let (camera, placement) = match file_camera {
+            Some(camera) => (camera, auto_camera::Placement::Outside),
+            None => auto_camera::for_mesh(&mesh, image).with_context(|| format!("{}: camera", path.display()))?,
+        };
         let mut notes = Vec::new();
         if placement == auto_camera::Placement::Inside {
             let f = camera.forward;

@@ -63,6 +63,7 @@ pub struct ObjGroup {
     pub normals: Vec<[Vec3; 3]>,
 }
 
+#[derive(Default)]
 pub struct ObjData {
     pub groups: Vec<ObjGroup>,
     pub materials: Vec<Material>,

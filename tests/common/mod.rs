@@ -1,6 +1,7 @@
 //! Shared test helpers: a validated GPU, the CLI binary, scratch directories.
 #![allow(dead_code)] // each test binary uses a different subset
 
+pub mod gltf;
 pub mod meshes;
 
 use std::path::{Path, PathBuf};
