@@ -140,3 +140,20 @@ fn a_point_light_lights_the_floor_as_its_intensity_says() {
         assert!(((e - expected) / expected).abs().max_element() < 0.03, "at {floor}: {e} against {expected}");
     }
 }
+
+/// A scene file without `[camera]` takes its glTF mesh's camera; naming an OBJ (which has none), it is an
+/// error that says so.
+#[test]
+fn a_scene_file_without_a_camera_takes_the_gltfs() {
+    let dir = common::scratch("gltf-camera");
+    common::gltf::write_glb(&dir, "scene", &[]);
+    common::gltf::write_obj(&dir, "scene");
+    let image = "[image]\nwidth = 32\nheight = 24\n";
+    std::fs::write(dir.join("glb.toml"), format!("mesh = \"scene.glb\"\n{image}")).unwrap();
+    let scene = Scene::load(&dir.join("glb.toml")).unwrap();
+    assert!((scene.camera.eye - common::gltf::CAMERA_EYE).length() < 1e-5, "eye {}", scene.camera.eye);
+    assert_eq!((scene.image.width, scene.image.height), (32, 24));
+    std::fs::write(dir.join("obj.toml"), format!("mesh = \"scene.obj\"\n{image}")).unwrap();
+    let e = format!("{:#}", Scene::load(&dir.join("obj.toml")).err().unwrap());
+    assert!(e.contains("obj.toml") && e.contains("no [camera]") && e.contains("scene.obj"), "{e}");
+}

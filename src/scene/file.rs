@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! mesh = "cornell.obj"          # relative to the TOML file
-//! [camera]
+//! [camera]                     # optional with a glTF mesh that has one
 //! eye = [278, 273, -800]
 //! target = [278, 273, 0]
 //! up = [0, 1, 0]
@@ -24,9 +24,10 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    /// OBJ file, relative to the TOML file.
+    /// The mesh (OBJ or glTF), relative to the TOML file.
     pub mesh: PathBuf,
-    pub camera: CameraSection,
+    /// Optional where the mesh is a glTF file with a camera (its first is taken).
+    pub camera: Option<CameraSection>,
     pub image: ImageSection,
     /// Render parameters for this scene, uninterpreted here.
     #[serde(default)]

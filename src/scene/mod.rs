@@ -242,17 +242,22 @@ impl Scene {
         self.inputs.iter().map(PathBuf::as_path).collect()
     }
 
-    /// Reads a TOML scene file and the mesh it names. Errors name the file and, where known, the line; a file
-    /// of another kind (a mesh, an image) is named as such.
+    /// Reads a TOML scene file and the mesh it names; the camera is the file's `[camera]`, else a glTF mesh's
+    /// first. Errors name the file and, where known, the line; a file of another kind (a mesh, an image) is
+    /// named as such.
     pub fn load(path: &Path) -> Result<Self> {
         match FileKind::of(path) {
             FileKind::Scene => {}
             kind => bail!("{} is {}, not a scene file (TOML)", path.display(), kind.describe()),
         }
         let file = file::SceneFile::read(path)?;
-        let c = &file.camera;
-        let camera = Camera::look_at(c.eye.into(), c.target.into(), c.up.into(), c.vfov_deg)
-            .with_context(|| format!("{}: [camera]", path.display()))?;
+        let camera = match &file.camera {
+            Some(c) => Some(
+                Camera::look_at(c.eye.into(), c.target.into(), c.up.into(), c.vfov_deg)
+                    .with_context(|| format!("{}: [camera]", path.display()))?,
+            ),
+            None => None,
+        };
         let image = ImageSize { width: file.image.width, height: file.image.height };
         ensure!(
             image.width >= 1 && image.height >= 1,
@@ -260,7 +265,16 @@ impl Scene {
             path.display()
         );
         let mesh_path = file.mesh_path(path);
-        let (obj, _) = read_mesh(&mesh_path)?;
+        let (obj, file_camera) = read_mesh(&mesh_path)?;
+        // The scene file's camera, else the glTF's first.
+        let Some(camera) = camera.or(file_camera) else {
+            bail!(
+                "{}: no [camera] table, and its mesh {} has no camera to take instead (a glTF file may have one; \
+                 an OBJ never does)",
+                path.display(),
+                mesh_path.display()
+            );
+        };
         let mut warnings = obj.warnings;
         let mesh =
             Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
