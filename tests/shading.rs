@@ -19,7 +19,6 @@ const RADIUS: f32 = 0.4;
 /// with its MTL and a scene file in `dir`; the sphere's corners carry their exact normals (`vn`) where
 /// `smooth`, else none (flat facets).
 fn sphere_scene(dir: &Path, smooth: bool, size: (u32, u32)) -> Scene {
-    let (stacks, slices) = (12usize, 24usize);
     let mut obj = String::from("mtllib scene.mtl\n");
     let quad = |obj: &mut String, first: usize| {
         writeln!(obj, "f {} {} {} {}", first, first + 1, first + 2, first + 3).unwrap();
@@ -52,40 +51,18 @@ fn sphere_scene(dir: &Path, smooth: bool, size: (u32, u32)) -> Scene {
         "light",
         [Vec3::new(0.2, 1.6, 0.0), Vec3::new(0.5, 1.6, 0.0), Vec3::new(0.5, 1.6, 0.3), Vec3::new(0.2, 1.6, 0.3)],
     );
-    // The sphere: the north pole, the rings, the south pole; normal k is vertex k's.
+    // The sphere (`meshes::sphere`, 12 stacks × 24 slices), each corner with the sphere's normal there.
     writeln!(obj, "g sphere\nusemtl blue").unwrap();
-    let first = vertices + 1;
-    let mut directions = vec![Vec3::Y];
-    for i in 1..stacks {
-        for j in 0..slices {
-            let (theta, phi) =
-                (std::f32::consts::PI * i as f32 / stacks as f32, std::f32::consts::TAU * j as f32 / slices as f32);
-            directions.push(Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+    for (k, t) in common::meshes::sphere(CENTRE, RADIUS, 12).iter().enumerate() {
+        for p in t {
+            let n = (*p - CENTRE).normalize();
+            writeln!(obj, "v {} {} {}\nvn {} {} {}", p.x, p.y, p.z, n.x, n.y, n.z).unwrap();
         }
-    }
-    directions.push(-Vec3::Y);
-    for d in &directions {
-        let p = CENTRE + RADIUS * *d;
-        writeln!(obj, "v {} {} {}", p.x, p.y, p.z).unwrap();
-        if smooth {
-            writeln!(obj, "vn {} {} {}", d.x, d.y, d.z).unwrap();
-        }
-    }
-    let (north, south) = (0, directions.len() - 1);
-    let at = |i: usize, j: usize| 1 + (i - 1) * slices + j % slices;
-    let face = |obj: &mut String, k: [usize; 3]| {
-        let corner = |k: usize| if smooth { format!("{0}//{1}", first + k, k + 1) } else { (first + k).to_string() };
-        writeln!(obj, "f {} {} {}", corner(k[0]), corner(k[1]), corner(k[2])).unwrap();
-    };
-    for j in 0..slices {
-        face(&mut obj, [north, at(1, j + 1), at(1, j)]);
-        face(&mut obj, [south, at(stacks - 1, j), at(stacks - 1, j + 1)]);
-    }
-    for i in 1..stacks - 1 {
-        for j in 0..slices {
-            face(&mut obj, [at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
-            face(&mut obj, [at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
-        }
+        let corner = |c: usize| {
+            let v = vertices + 3 * k + c + 1;
+            if smooth { format!("{v}//{}", 3 * k + c + 1) } else { v.to_string() }
+        };
+        writeln!(obj, "f {} {} {}", corner(0), corner(1), corner(2)).unwrap();
     }
     std::fs::write(dir.join("scene.obj"), obj).unwrap();
     std::fs::write(

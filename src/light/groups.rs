@@ -43,7 +43,8 @@ pub struct Lights {
     pub surface_group: BTreeMap<SurfaceId, u32>,
 }
 
-fn luminance(c: Vec3) -> f32 {
+/// Rec. 709 luminance of linear RGB `c`: a light's power, a point's weight, how bright a pixel is.
+pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 

@@ -48,7 +48,7 @@ use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::layout::SensorLayout;
 use crate::sensors::refine::{self, Refinement, Visibility};
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
-use crate::supersample;
+use crate::supersample::{self, ShadowPoints};
 use crate::vk::{Access, Buffer, Device, barrier, transfer};
 
 /// The steps of a render (docs/DESIGN.md §3), for progress displays.
@@ -417,6 +417,8 @@ pub struct Renderer {
     bvh: Bvh,
     /// Points on the lights for the refinement's light hints (the exact estimator with lights; else `None`).
     light_points: Option<Vec<LightPoint>>,
+    /// Points on the lights that supersampled samples cast shadow rays at (with `light_points`).
+    shadow_points: Option<ShadowPoints>,
     interpolate: InterpolatePass,
     filter: FilterPass,
     compose: ComposePass,
@@ -495,12 +497,14 @@ impl Renderer {
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
         let scale = scene.mesh.scale();
         let hierarchy = cluster_hierarchy(device, scene, config.detail);
-        let layout = config.layout(&Lights::new(&scene.mesh));
+        let lights = Lights::new(&scene.mesh);
+        let layout = config.layout(&lights);
         let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
         // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
         // cache's pieces are halved.
         let bvh = Bvh::build(&scene.mesh.triangles);
-        let light_points = (layout.groups > 0).then(|| hints::light_points(&Lights::new(&scene.mesh)));
+        let light_points = (layout.groups > 0).then(|| hints::light_points(&lights));
+        let shadow_points = (layout.groups > 0).then(|| ShadowPoints::new(&lights));
         if let Some(c) = config.cache {
             check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;
         }
@@ -541,6 +545,7 @@ impl Renderer {
             host: scene.clone(),
             bvh,
             light_points,
+            shadow_points,
             runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,

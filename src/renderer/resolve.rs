@@ -11,7 +11,7 @@ use crate::gbuffer::cast::Visible;
 use crate::passes::resolve::ResolveTargets;
 use crate::scene::ImageSize;
 use crate::sensors::refine::Visibility;
-use crate::supersample::{self, Plan, SAMPLES, SLICE, ShadowPoints, SubSampleLight};
+use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleLight};
 use crate::vk::{Access, barrier, transfer};
 
 impl Renderer {
@@ -35,11 +35,10 @@ impl Renderer {
         let device = self.device.clone();
         let slice = plan.pixels.len().min(SLICE) as u32;
         let averaged = map_buffer(&device, "supersampled radiance", ImageSize { width: slice, height: 1 })?;
-        let shadow = light.map(|_| ShadowPoints::new(&self.scene.lights));
         for start in (0..plan.pixels.len()).step_by(SLICE) {
             let range = start..(start + SLICE).min(plan.pixels.len());
             let seen = plan.samples(&self.host, &self.bvh, g.size, range.clone());
-            let sample_light = (light.zip(self.light_points.as_deref()).zip(shadow.as_ref())).map(
+            let sample_light = (light.zip(self.light_points.as_deref()).zip(self.shadow_points.as_ref())).map(
                 |(((visibility, hints, bits), points), shadow)| SubSampleLight {
                     visibility,
                     hints,

@@ -11,7 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::gbuffer::GBufferData;
-use crate::light::groups::Lights;
+use crate::light::groups::{LightGroup, Lights};
 use crate::scene::bvh::Bvh;
 use crate::scene::{NO_SURFACE, Ray, stratified_point, triangle_area};
 
@@ -31,19 +31,28 @@ pub struct LightPoint {
 /// spread over the group's emitters in proportion to their area: a stratified choice of triangle, then a
 /// low-discrepancy point on it. Deterministic.
 pub fn light_points(lights: &Lights) -> Vec<LightPoint> {
-    let mut points = Vec::new();
-    for (group, n) in lights.groups.iter().zip(point_groups(lights)) {
-        let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
-        let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
-        let total: f32 = areas.iter().sum();
-        for k in 0..n {
+    (lights.groups.iter().zip(point_groups(lights)))
+        .flat_map(|(group, n)| group_points(lights, group, n).into_iter().map(|(point, _)| point))
+        .collect()
+}
+
+/// `n` points on `group`'s emitters in proportion to their area (a stratified choice of triangle, then a
+/// low-discrepancy point on it), each with its emitter's `Ke`; none for a group of no area. Deterministic.
+pub fn group_points(lights: &Lights, group: &LightGroup, n: usize) -> Vec<(LightPoint, Vec3)> {
+    let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
+    let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
+    let total: f32 = areas.iter().sum();
+    if total <= 0.0 {
+        return Vec::new();
+    }
+    (0..n)
+        .map(|k| {
             let (i, u, v) = stratified_point(&areas, total, k, n);
             let e = &emitters[i];
-            let normal = (e.v[1] - e.v[0]).cross(e.v[2] - e.v[0]).normalize_or_zero();
-            points.push(LightPoint { position: e.v[0] + (e.v[1] - e.v[0]) * u + (e.v[2] - e.v[0]) * v, normal });
-        }
-    }
-    points
+            let (a, b) = (e.v[1] - e.v[0], e.v[2] - e.v[0]);
+            (LightPoint { position: e.v[0] + a * u + b * v, normal: a.cross(b).normalize_or_zero() }, e.ke)
+        })
+        .collect()
 }
 
 fn points_per_group(lights: &Lights) -> usize {
@@ -52,7 +61,7 @@ fn points_per_group(lights: &Lights) -> usize {
 
 /// How many of [`light_points`] each light group has, in order (0 for a group of no area).
 fn point_groups(lights: &Lights) -> Vec<usize> {
-    let area = |g: &crate::light::groups::LightGroup| -> f32 {
+    let area = |g: &LightGroup| -> f32 {
         lights.emitters[g.emitters.start as usize..g.emitters.end as usize].iter().map(|e| triangle_area(&e.v)).sum()
     };
     lights.groups.iter().map(|g| if area(g) > 0.0 { points_per_group(lights) } else { 0 }).collect()

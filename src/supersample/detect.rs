@@ -5,6 +5,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::gbuffer::GBufferData;
+use crate::light::groups::luminance;
 use crate::scene::{NO_SURFACE, Scene};
 use crate::sensors::hints;
 use crate::sensors::refine::NORMAL_TOLERANCE_DEG;
@@ -120,7 +121,7 @@ pub fn detect(scene: &Scene, g: &GBufferData, hints: &[u64], bits: &[u64]) -> Ve
 /// misses where the light fades over more than a pixel.
 pub fn light_ends(g: &GBufferData, radiance: &[Vec4], planned: &[u32]) -> Vec<Flags> {
     let (w, h) = (g.size.width as i64, g.size.height as i64);
-    let luminance = |i: usize| radiance[i].truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let luminance = |i: usize| luminance(radiance[i].truncate());
     let mut taken = vec![false; g.surface.len()];
     planned.iter().for_each(|&i| taken[i as usize] = true);
     (0..w * h)

@@ -11,8 +11,8 @@ use super::shadow::ShadowPoints;
 use super::{Plan, SAMPLES};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
-use crate::scene::NO_SURFACE;
 use crate::scene::bvh::Bvh;
+use crate::scene::{ImageSize, NO_SURFACE};
 use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::refine::Visibility;
 
@@ -109,14 +109,7 @@ pub fn sub_samples(
 /// that shows `sample`: the visibilities or the light hints' shares differ between the pixels of the 3 × 3
 /// neighbourhood that show its surface alike (those its light is interpolated from); `None` where none does.
 fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32, sample: &Point) -> Option<u32> {
-    let (w, h) = (g.size.width as i64, g.size.height as i64);
-    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
-    let around: Vec<usize> = (-1..=1)
-        .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
-        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
-        .map(|(qx, qy)| (qy * w + qx) as usize)
-        .filter(|&i| Point::of(g, i).alike(sample))
-        .collect();
+    let around: Vec<usize> = neighbourhood(g.size, pixel).filter(|&i| Point::of(g, i).alike(sample)).collect();
     if around.is_empty() {
         return None;
     }
@@ -143,14 +136,12 @@ fn with_hint_detail(
     (g, at, sample): (&GBufferData, Vec2, &Point),
     (pixel, position, normal): (u32, &glam::Vec4, &glam::Vec4),
 ) -> Visibility {
-    let (w, h) = (g.size.width as i64, g.size.height as i64);
-    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
-    let around = (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)));
-    let mut hints = around
-        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
-        .map(|(qx, qy)| l.hints[(qy * w + qx) as usize]);
+    if l.hints.is_empty() {
+        return v;
+    }
+    let mut hints = neighbourhood(g.size, pixel).map(|i| l.hints[i]);
     let first = hints.next();
-    if l.hints.is_empty() || hints.all(|m| Some(m) == first) {
+    if hints.all(|m| Some(m) == first) {
         return v;
     }
     let share = |mask: u64| hints::shares(l.bits, None, mask);
@@ -209,15 +200,11 @@ fn bilinear(g: &GBufferData, value: &dyn Fn(usize) -> Visibility, at: Vec2, samp
 /// The donor of a sample at the image point `at` in `pixel`, showing `sample`; and whether it shows the
 /// sample's surface (see [`sub_samples`]).
 fn donor(g: &GBufferData, pixel: u32, at: Vec2, sample: &Point) -> (u32, bool) {
-    let (w, h) = (g.size.width as i64, g.size.height as i64);
-    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
-    let around = (-1..=1)
-        .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
-        .filter(|&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
-        .map(|(qx, qy)| {
-            let distance = (Vec2::new(qx as f32 + 0.5, qy as f32 + 0.5) - at).length_squared();
-            ((qy * w + qx) as u32, distance)
-        });
+    let w = g.size.width as usize;
+    let around = neighbourhood(g.size, pixel).map(|q| {
+        let distance = (Vec2::new((q % w) as f32 + 0.5, (q / w) as f32 + 0.5) - at).length_squared();
+        (q as u32, distance)
+    });
     let nearest = |accept: &dyn Fn(&Point) -> bool| {
         around
             .clone()
@@ -232,6 +219,16 @@ fn donor(g: &GBufferData, pixel: u32, at: Vec2, sample: &Point) -> (u32, bool) {
         return (q, true);
     }
     (nearest(&|p| p.surface != NO_SURFACE).unwrap_or(pixel), false)
+}
+
+/// The pixels of `pixel`'s 3 × 3 neighbourhood in an image of `size` (itself included), row by row.
+fn neighbourhood(size: ImageSize, pixel: u32) -> impl Iterator<Item = usize> + Clone {
+    let (w, h) = (size.width as i64, size.height as i64);
+    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
+    (-1..=1)
+        .flat_map(move |dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        .filter(move |&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+        .map(move |(qx, qy)| (qy * w + qx) as usize)
 }
 
 #[cfg(test)]

@@ -14,9 +14,10 @@ use glam::Vec3;
 
 use super::SAMPLES;
 use crate::gpu_types::MAX_GROUPS;
-use crate::light::groups::Lights;
+use crate::light::groups::{Lights, luminance};
+use crate::scene::Ray;
 use crate::scene::bvh::Bvh;
-use crate::scene::{Ray, stratified_point, triangle_area};
+use crate::sensors::hints;
 use crate::sensors::refine::Visibility;
 
 /// Shadow rays per light group a sample casts where the group's light is uneven around its pixel (and its
@@ -33,7 +34,8 @@ struct Point {
 }
 
 /// [`SHADOW_RAYS`] × `SAMPLES` points on each light group, spread over its emitters in proportion to area
-/// (`stratified_point`). Deterministic: a render's bytes do not change.
+/// (`hints::group_points`, as the light hints' points). Deterministic: a render's bytes do not change.
+/// Built once per renderer.
 pub struct ShadowPoints {
     groups: Vec<Vec<Point>>,
 }
@@ -43,23 +45,8 @@ impl ShadowPoints {
         let count = SHADOW_RAYS * SAMPLES;
         let groups = (lights.groups.iter())
             .map(|group| {
-                let emitters = &lights.emitters[group.emitters.start as usize..group.emitters.end as usize];
-                let areas: Vec<f32> = emitters.iter().map(|e| triangle_area(&e.v)).collect();
-                let total: f32 = areas.iter().sum();
-                if total <= 0.0 {
-                    return Vec::new();
-                }
-                (0..count)
-                    .map(|k| {
-                        let (i, u, v) = stratified_point(&areas, total, k, count);
-                        let e = &emitters[i];
-                        let (a, b) = (e.v[1] - e.v[0], e.v[2] - e.v[0]);
-                        Point {
-                            position: e.v[0] + a * u + b * v,
-                            normal: a.cross(b).normalize_or_zero(),
-                            luminance: e.ke.dot(Vec3::new(0.2126, 0.7152, 0.0722)),
-                        }
-                    })
+                (hints::group_points(lights, group, count).into_iter())
+                    .map(|(p, ke)| Point { position: p.position, normal: p.normal, luminance: luminance(ke) })
                     .collect()
             })
             .collect();
