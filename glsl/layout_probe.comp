@@ -31,6 +31,7 @@ layout(std430, set = 0, binding = 22) buffer ExactInterpolatePushes { ExactInter
 layout(std430, set = 0, binding = 23) buffer SubSamples { GpuSubSample sub_samples[]; };
 layout(std430, set = 0, binding = 24) buffer ResolvePushes { ResolvePush resolve_pushes[]; };
 layout(std430, set = 0, binding = 25) buffer SupersampledPixels { GpuSupersampledPixel supersampled_pixels[]; };
+layout(std430, set = 0, binding = 26) buffer Textures { GpuTexture textures[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -60,4 +61,5 @@ void main() {
     sub_samples[1] = sub_samples[0];
     resolve_pushes[1] = resolve_pushes[0];
     supersampled_pixels[1] = supersampled_pixels[0];
+    textures[1] = textures[0];
 }

@@ -5,8 +5,19 @@
 
 // Indexed by surface id; entry 0 is "no surface".
 struct GpuSurface {
-    vec4 kd;  // albedo Kd (rgb)
-    vec4 ke;  // emitted radiance Ke (rgb); w = light group + 1 for an emitter (front face only), else 0
+    vec4 kd;         // albedo the sensors see (rgb): Kd times its texture's mean over the surface
+    vec4 ke;         // emitted radiance Ke (rgb); w = light group + 1 for an emitter (front face only), else 0
+    vec4 kd_factor;  // Kd itself (rgb): the G-buffer multiplies its texture by it
+    uint kd_map;     // colour texture index + 1 (GpuTexture), 0 for none
+    uint _pad[3];
+};
+
+// Where a texture's levels lie in the scene's texel buffer (src/scene/texture.rs draws the layout).
+struct GpuTexture {
+    uint offset;  // first texel of level 0
+    uint width;   // level 0; each further level halves (rounded down, at least 1)
+    uint height;
+    uint levels;
 };
 
 struct GBufferPush {

@@ -7,16 +7,16 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
 use crate::gi::RadianceCache;
 use crate::gpu_types::{
     CLUSTER_EMITTER, EMITTER_CHUNK, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode, GpuEmitter,
-    GpuEmitterChunk, GpuLightGroup, GpuSurface, MAX_GROUPS, NODE_LEAF, Vertex,
+    GpuEmitterChunk, GpuLightGroup, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
-use crate::scene::{Mesh, Scene};
+use crate::scene::{Mesh, Scene, texture};
 use crate::vk::{Buffer, Device, transfer};
 
 pub struct GpuScene {
@@ -25,6 +25,11 @@ pub struct GpuScene {
     /// One `vec4` per vertex of the soup: its triangle's shading normal at that corner (the front normal on
     /// a flat mesh), which the G-buffer interpolates.
     pub normals: Arc<Buffer>,
+    /// One `vec2` per vertex of the soup: its texture coordinates ((0, 0) without textures).
+    pub uvs: Arc<Buffer>,
+    /// The colour textures: a `GpuTexture` each, and every level's packed texels (`scene::texture`).
+    pub textures: Arc<Buffer>,
+    pub texels: Arc<Buffer>,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
     /// The emitters, group by group (`GpuEmitter`); them in chunks of at most `EMITTER_CHUNK`
@@ -244,6 +249,12 @@ impl GpuScene {
             groups.push(GpuLightGroup { first_chunk, chunks: chunks.len() as u32 - first_chunk, _pad: [0; 2] });
         }
         let normals: Vec<Vec4> = mesh.corner_normals().map(|n| n.extend(0.0)).collect();
+        // Without textures, placeholders that no shader reads (no surface names a texture).
+        let uvs: Vec<Vec2> = if mesh.uvs.is_empty() { vec![Vec2::ZERO] } else { mesh.corner_uvs().collect() };
+        let (mut texels, mut textures) = texture::gpu_textures(&mesh.textures);
+        if textures.is_empty() {
+            (texels, textures) = (vec![0], vec![GpuTexture::default()]);
+        }
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             vertex_count: vertices.len() as u32,
@@ -254,6 +265,9 @@ impl GpuScene {
                 vk::BufferUsageFlags::VERTEX_BUFFER | storage,
             )?),
             normals: Arc::new(transfer::upload(device, "corner normals", &normals, storage)?),
+            uvs: Arc::new(transfer::upload(device, "corner texture coordinates", &uvs, storage)?),
+            textures: Arc::new(transfer::upload(device, "texture table", &textures, storage)?),
+            texels: Arc::new(transfer::upload(device, "texels", &texels, storage)?),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
             chunk_count: chunks.len() as u32,
@@ -277,7 +291,15 @@ pub fn surfaces(mesh: &Mesh, lights: &Lights) -> Vec<GpuSurface> {
         .chain((1..=mesh.surfaces.len() as u32).map(|id| {
             let m = mesh.material_of(id);
             let group = lights.surface_group.get(&id).map_or(0.0, |&g| g as f32 + 1.0);
-            GpuSurface { kd: m.kd.extend(0.0), ke: m.ke.extend(group) }
+            // A texture applies where the mesh has texture coordinates.
+            let kd_map = m.kd_map.filter(|_| !mesh.uvs.is_empty()).map_or(0, |t| t as u32 + 1);
+            GpuSurface {
+                kd: mesh.surface_albedo(id).extend(0.0),
+                ke: m.ke.extend(group),
+                kd_factor: m.kd.extend(0.0),
+                kd_map,
+                _pad: [0; 3],
+            }
         }))
         .collect()
 }

@@ -19,11 +19,29 @@ pub struct Vertex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSurface {
-    /// Albedo `Kd` (rgb), w unused.
+    /// The albedo the sensor maps and the radiance cache see (rgb): `Kd` times its texture's mean over the
+    /// surface (`Mesh::surface_albedo`); w unused.
     pub kd: Vec4,
     /// Emitted radiance `Ke` (rgb); w = its light group + 1 for an emitter (one-sided: front face only), else
     /// 0.
     pub ke: Vec4,
+    /// `Kd` itself (rgb), which the G-buffer multiplies its texture by; w unused.
+    pub kd_factor: Vec4,
+    /// Its colour texture's index + 1 in the texture table (`GpuTexture`), 0 for none.
+    pub kd_map: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Where a texture's levels lie in the scene's texel buffer (`scene::texture` draws the layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// First texel of level 0.
+    pub offset: u32,
+    /// Level 0's size; each further level halves it (rounded down, at least 1).
+    pub width: u32,
+    pub height: u32,
+    pub levels: u32,
 }
 
 /// Push constants of the G-buffer pass.

@@ -148,7 +148,15 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
         triangles,
         shading: Vec::new(),
         surfaces: vec![sensorlight::scene::Surface { name: "wall".into(), material: 0 }],
-        materials: vec![sensorlight::scene::Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO }],
+        uvs: Vec::new(),
+        materials: vec![sensorlight::scene::Material {
+            name: "grey".into(),
+            kd: Vec3::splat(0.5),
+            ke: Vec3::ZERO,
+            kd_map: None,
+        }],
+        textures: Vec::new(),
+        albedo: vec![Vec3::splat(0.5)],
     };
     for resolution in [1, 2, 7] {
         let cache = RadianceCache::build(&mesh, resolution, &[], None);

@@ -7,8 +7,8 @@ use std::mem::offset_of;
 use sensorlight::gpu_types::{
     ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
     GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
-    GpuSensorResult, GpuSensorView, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuZoom, ImagePush, ReducePush,
-    ResolvePush, SensorPush,
+    GpuSensorResult, GpuSensorView, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuTexture, GpuZoom, ImagePush,
+    ReducePush, ResolvePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -82,7 +82,7 @@ macro_rules! rust_layout {
 fn shared_structs_match_glsl() {
     let glsl = layouts(shaders::LAYOUT_PROBE_COMP);
     let rust = [
-        (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke)),
+        (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke, kd_factor, kd_map, _pad)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
         (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, eye, layer, flags, _pad)),
         (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, exact, emission_scale, cache)),
@@ -166,6 +166,7 @@ fn shared_structs_match_glsl() {
         ),
         (25, "GpuSupersampledPixel", rust_layout!(GpuSupersampledPixel: emission, pixel, _pad)),
         (24, "ResolvePush", rust_layout!(ResolvePush: background, width, count, samples, groups, bias, exact, _pad)),
+        (26, "GpuTexture", rust_layout!(GpuTexture: offset, width, height, levels)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

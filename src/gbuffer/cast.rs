@@ -35,7 +35,7 @@ pub fn first_surface(scene: &Scene, bvh: &Bvh, ray: &Ray) -> Option<Visible> {
     Some(Visible {
         position: position.extend(1.0),
         normal: normal.extend(if front { 1.0 } else { 0.0 }),
-        albedo: material.kd.extend(1.0),
+        albedo: scene.mesh.albedo_at(hit.triangle as usize, position).extend(1.0),
         emission: emission.extend(1.0),
         surface: tri.surface,
     })

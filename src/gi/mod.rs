@@ -83,7 +83,7 @@ impl RadianceCache {
         let grid = Grid::new(mesh.bounds, resolution);
         let pieces = entries::build(&grid, &mesh.triangles, lod, light);
         let albedo =
-            pieces.entries.iter().map(|e| mesh.material_of(e.surface).kd.min(Vec3::splat(MAX_ALBEDO))).collect();
+            pieces.entries.iter().map(|e| mesh.surface_albedo(e.surface).min(Vec3::splat(MAX_ALBEDO))).collect();
         let keys: Vec<([u32; 2], u32)> =
             pieces.keys.iter().map(|&((cell, surface), reference)| ([cell, surface], reference)).collect();
         let slots = table(&keys);

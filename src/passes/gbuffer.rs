@@ -56,13 +56,25 @@ impl GBufferPass {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let layout = PipelineLayout::new(
             device,
-            &[(0, storage, vk::ShaderStageFlags::FRAGMENT), (1, storage, vk::ShaderStageFlags::VERTEX)],
+            &[
+                (0, storage, vk::ShaderStageFlags::FRAGMENT),
+                (1, storage, vk::ShaderStageFlags::VERTEX),
+                (2, storage, vk::ShaderStageFlags::VERTEX),
+                (3, storage, vk::ShaderStageFlags::FRAGMENT),
+                (4, storage, vk::ShaderStageFlags::FRAGMENT),
+            ],
             size_of::<GBufferPush>() as u32,
             vk::ShaderStageFlags::VERTEX,
         )?;
-        let pool = DescriptorPool::new(device, 1, &[(storage, 2)])?;
+        let pool = DescriptorPool::new(device, 1, &[(storage, 5)])?;
         let set = pool.allocate(&layout)?;
-        SetWriter::new(set).storage_buffer(0, &scene.surfaces).storage_buffer(1, &scene.normals).apply(device);
+        SetWriter::new(set)
+            .storage_buffer(0, &scene.surfaces)
+            .storage_buffer(1, &scene.normals)
+            .storage_buffer(2, &scene.uvs)
+            .storage_buffer(3, &scene.textures)
+            .storage_buffer(4, &scene.texels)
+            .apply(device);
         let pipeline = Pipeline::graphics(
             device,
             &layout,

@@ -184,7 +184,8 @@ impl<'a> Integrator<'a> {
         if cos_light > 0.0 && material.is_emitter() {
             Seen::Emitter { triangle: hit.triangle, ke: material.ke, t: hit.t, cos_light }
         } else {
-            Seen::Other(material.kd * self.params.indirect.epsilon())
+            let albedo = self.scene.mesh.albedo_at(hit.triangle as usize, ray.at(hit.t));
+            Seen::Other(albedo * self.params.indirect.epsilon())
         }
     }
 

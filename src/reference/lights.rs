@@ -110,7 +110,12 @@ mod tests {
     use crate::scene::{Camera, ImageSize, Material};
 
     fn mesh(groups: Vec<(&str, usize, Vec<[Vec3; 3]>)>, ke: [f32; 3]) -> Mesh {
-        let material = |name: &str, ke: f32| Material { name: name.into(), kd: Vec3::splat(0.5), ke: Vec3::splat(ke) };
+        let material = |name: &str, ke: f32| Material {
+            name: name.into(),
+            kd: Vec3::splat(0.5),
+            ke: Vec3::splat(ke),
+            kd_map: None,
+        };
         let materials = ke.iter().enumerate().map(|(i, &k)| material(&format!("m{i}"), k)).collect();
         let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 60.0).unwrap();
         from_groups(groups, materials, camera, ImageSize { width: 1, height: 1 }).mesh

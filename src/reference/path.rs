@@ -94,7 +94,8 @@ impl Integrator<'_> {
                 return radiance;
             }
             depth += 1;
-            beta *= material.kd;
+            let at = ray.at(hit.t);
+            beta *= self.scene.mesh.albedo_at(hit.triangle as usize, at);
             let u = vertex(depth);
             if depth > ROULETTE_AFTER {
                 let q = beta.max_element().min(MAX_SURVIVAL);
@@ -106,7 +107,6 @@ impl Integrator<'_> {
             if !(beta.max_element() > 0.0 && beta.max_element() <= MAX_THROUGHPUT) {
                 return radiance; // black (nothing more to add) or past the cap (module docs)
             }
-            let at = ray.at(hit.t);
             let shading = self.scene.mesh.shading_normal(hit.triangle as usize, at);
             let normal = if cos_light > 0.0 { shading } else { -shading };
             let frame = SensorFrame::new(at, normal, self.bias);

@@ -16,7 +16,7 @@ mod stats;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, Result, bail};
+use anyhow::{Context as _, Result, bail, ensure};
 use ash::vk;
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
@@ -41,7 +41,7 @@ use crate::passes::interpolate::{self, InterpolatePass};
 use crate::passes::resolve::ResolvePass;
 use crate::passes::sensor_maps::{CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
-use crate::scene::{Camera, ImageSize, Scene};
+use crate::scene::{Camera, ImageSize, Scene, Texture, texture};
 use crate::sensors::SensorKind;
 use crate::sensors::frame;
 use crate::sensors::hints::{self, LightPoint};
@@ -394,6 +394,23 @@ fn check_cache_size(device: &Device, bytes: u64, resolution: u32) -> Result<()> 
     Ok(())
 }
 
+/// The scene's textures against the device, before anything is uploaded: their levels together in one
+/// storage buffer, at most a quarter of its local memory.
+fn check_textures(device: &Device, textures: &[Texture]) -> Result<()> {
+    let bytes = texture::gpu_bytes(textures);
+    let most = (device.adapter.device_local_bytes / 4).min(device.adapter.limits.max_storage_buffer_range as u64);
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    ensure!(
+        bytes <= most,
+        "the scene's {} texture(s) need {:.0} MiB with their mipmaps, more than this device allows ({:.0} MiB: a \
+         quarter of its memory, in one storage buffer); use smaller images",
+        textures.len(),
+        mib(bytes),
+        mib(most)
+    );
+    Ok(())
+}
+
 /// The sensor size against the device's largest image and framebuffer side.
 fn check_size(device: &Device, config: &RendererConfig) -> Result<()> {
     let limits = &device.adapter.limits;
@@ -495,6 +512,7 @@ impl Renderer {
     }
 
     fn new(device: &Arc<Device>, scene: &Scene, config: RendererConfig, choice: Choice) -> Result<Self> {
+        check_textures(device, &scene.mesh.textures)?;
         let scale = scene.mesh.scale();
         let hierarchy = cluster_hierarchy(device, scene, config.detail);
         let lights = Lights::new(&scene.mesh);

@@ -21,10 +21,16 @@ pub fn from_groups(
 ) -> Scene {
     let groups: Vec<ObjGroup> = groups
         .into_iter()
-        .map(|(name, material, triangles)| ObjGroup { name: name.into(), material, triangles, normals: Vec::new() })
+        .map(|(name, material, triangles)| ObjGroup {
+            name: name.into(),
+            material,
+            triangles,
+            normals: Vec::new(),
+            uvs: Vec::new(),
+        })
         .collect();
     let mut warnings = Vec::new();
-    let mesh = Mesh::new(&groups, materials, &mut warnings).expect("built-in scenes have triangles");
+    let mesh = Mesh::new(&groups, materials, Vec::new(), &mut warnings).expect("built-in scenes have triangles");
     let render = toml::Table::new();
     Scene {
         path: "(built in)".into(),
@@ -58,7 +64,8 @@ pub fn lightbox(size: ImageSize) -> Scene {
         groups.push(("block", 0, rect(center + n * half, u * half, v * half, n)));
     }
     let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), c, y, 40.0).expect("valid camera");
-    let material = |name: &str, kd: Vec3, ke: f32| Material { name: name.into(), kd, ke: Vec3::splat(ke) };
+    let material =
+        |name: &str, kd: Vec3, ke: f32| Material { name: name.into(), kd, ke: Vec3::splat(ke), kd_map: None };
     let materials = vec![
         material("white", Vec3::splat(0.7), 0.0),
         material("red", Vec3::new(0.7, 0.1, 0.1), 0.0),

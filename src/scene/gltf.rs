@@ -176,9 +176,14 @@ impl Reader<'_> {
             if !unused.is_empty() {
                 self.warn(format!("material '{name}': {} not used", unused.join(", ")));
             }
-            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke });
+            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map: None });
         }
-        self.mesh.materials.push(Material { name: "(glTF default, white)".into(), kd: Vec3::ONE, ke: Vec3::ZERO });
+        self.mesh.materials.push(Material {
+            name: "(glTF default, white)".into(),
+            kd: Vec3::ONE,
+            ke: Vec3::ZERO,
+            kd_map: None,
+        });
     }
 
     /// `node` under `parent`'s transform, below the nodes `ancestors`, then its children.
@@ -272,6 +277,7 @@ impl Reader<'_> {
                     Some(n) => corners.iter().map(|&t| order(t).map(|i| n[i as usize])).collect(),
                     None => Vec::new(),
                 },
+                uvs: Vec::new(),
             };
             self.mesh.groups.push(group);
         }
@@ -307,9 +313,15 @@ impl Reader<'_> {
             // averaged over directions, is the light's.
             let area: f32 = triangles.iter().map(super::triangle_area).sum();
             let ke = power * 4.0 / area;
-            self.mesh.materials.push(Material { name: format!("light '{name}'"), kd: Vec3::ZERO, ke });
+            self.mesh.materials.push(Material { name: format!("light '{name}'"), kd: Vec3::ZERO, ke, kd_map: None });
             let material = self.mesh.materials.len() - 1;
-            self.mesh.groups.push(ObjGroup { name: format!("light '{name}'"), material, triangles, normals });
+            self.mesh.groups.push(ObjGroup {
+                name: format!("light '{name}'"),
+                material,
+                triangles,
+                normals,
+                uvs: Vec::new(),
+            });
         }
     }
 }

@@ -11,17 +11,19 @@ pub mod kind;
 pub mod obj;
 pub mod ray;
 pub mod surfaces;
+pub mod texture;
 mod unrendered;
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result, bail, ensure};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 pub use camera::Camera;
 pub use kind::FileKind;
 pub use obj::Material;
 pub use ray::Ray;
+pub use texture::Texture;
 
 /// Surface ids are 1-based; 0 marks "no surface" (the background) in the G-buffer.
 pub type SurfaceId = u32;
@@ -105,17 +107,30 @@ pub struct Mesh {
     /// Each triangle's corners' shading normals (unit, on its front's side), interpolated across it for
     /// shading ([`Mesh::shading_normal`]); empty where the mesh gives none: flat, the front normal.
     pub shading: Vec<[Vec3; 3]>,
+    /// Each triangle's corners' texture coordinates ((0, 0): the image's top-left corner); empty where no
+    /// material has a texture.
+    pub uvs: Vec<[Vec2; 3]>,
     /// Indexed by `SurfaceId - 1`.
     pub surfaces: Vec<Surface>,
     pub materials: Vec<Material>,
+    /// The colour textures the materials name (`Material::kd_map`).
+    pub textures: Vec<Texture>,
+    /// Each surface's mean albedo ([`Mesh::surface_albedo`]), indexed by `SurfaceId - 1`.
+    pub albedo: Vec<Vec3>,
     pub bounds: Aabb,
 }
 
 impl Mesh {
     /// Builds the mesh from groups of triangles, dropping degenerate ones and assigning surface ids.
     /// `warnings` receives what was dropped.
-    pub fn new(groups: &[obj::ObjGroup], materials: Vec<Material>, warnings: &mut Vec<String>) -> Result<Self> {
-        let (triangles, shading, surfaces, dropped) = surfaces::assign(groups, &materials);
+    pub fn new(
+        groups: &[obj::ObjGroup],
+        materials: Vec<Material>,
+        textures: Vec<Texture>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Self> {
+        let surfaces::Assigned { triangles, normals: shading, uvs, surfaces, dropped } =
+            surfaces::assign(groups, &materials);
         if let Some((group, v)) = &dropped.first_overflowing {
             bail!(
                 "{} triangle(s) too large for 32-bit floats: their area overflows (the first, in group '{group}': \
@@ -146,7 +161,78 @@ impl Mesh {
             bounds.min,
             bounds.max
         );
-        Ok(Self { triangles, shading, surfaces, materials, bounds })
+        let mut mesh = Self { triangles, shading, uvs, surfaces, materials, textures, albedo: Vec::new(), bounds };
+        mesh.albedo = mesh.mean_albedos();
+        Ok(mesh)
+    }
+
+    /// The albedo at `p` on triangle `triangle`: `Kd`, times its texture at `p` (full resolution) where the
+    /// material has one.
+    pub fn albedo_at(&self, triangle: usize, p: Vec3) -> Vec3 {
+        let material = self.material_of(self.triangles[triangle].surface);
+        match (material.kd_map, self.uvs.get(triangle)) {
+            (Some(map), Some(uvs)) => {
+                let [b0, b1, b2] = barycentric(&self.triangles[triangle].v, p);
+                let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
+                material.kd * self.textures[map].sample(uv, 0.0).truncate()
+            }
+            _ => material.kd,
+        }
+    }
+
+    /// The mean albedo over surface `surface`: what the sensor maps and the radiance cache see of it
+    /// (docs/DESIGN.md §1): `Kd` where it has no texture.
+    pub fn surface_albedo(&self, surface: SurfaceId) -> Vec3 {
+        self.albedo[surface as usize - 1]
+    }
+
+    /// [`Mesh::surface_albedo`] of every surface: each textured triangle's mean, weighted by area. A
+    /// triangle's mean is that of 16 points spread evenly over it (the centroids of its 4 × 4 subdivision),
+    /// read at the level of detail where its texture footprint is about 16 texels, so that together they
+    /// cover it.
+    fn mean_albedos(&self) -> Vec<Vec3> {
+        const N: usize = 4;
+        let mut sums = vec![(Vec3::ZERO, 0.0f32); self.surfaces.len()];
+        for (i, t) in self.triangles.iter().enumerate() {
+            let material = self.material_of(t.surface);
+            let (Some(map), Some(uv)) = (material.kd_map, self.uvs.get(i)) else { continue };
+            let texture = &self.textures[map];
+            let size = Vec2::new(texture.width() as f32, texture.height() as f32);
+            let texels = 0.5 * ((uv[1] - uv[0]) * size).perp_dot((uv[2] - uv[0]) * size).abs();
+            let lod = 0.5 * (texels / (N * N) as f32).max(1.0).log2();
+            let mut mean = Vec3::ZERO;
+            for a in 0..N {
+                for b in 0..N - a {
+                    // The upright sub-triangle at (a, b), and the inverted one beside it where there is one.
+                    let mut centroids = vec![Vec2::new(a as f32 + 1.0 / 3.0, b as f32 + 1.0 / 3.0)];
+                    if a + b + 1 < N {
+                        centroids.push(Vec2::new(a as f32 + 2.0 / 3.0, b as f32 + 2.0 / 3.0));
+                    }
+                    for c in centroids {
+                        let (b1, b2) = (c.x / N as f32, c.y / N as f32);
+                        let at = uv[0] * (1.0 - b1 - b2) + uv[1] * b1 + uv[2] * b2;
+                        mean += texture.sample(at, lod).truncate();
+                    }
+                }
+            }
+            let area = triangle_area(&t.v);
+            let s = &mut sums[t.surface as usize - 1];
+            s.0 += mean / (N * N) as f32 * area;
+            s.1 += area;
+        }
+        (1..=self.surfaces.len() as SurfaceId)
+            .zip(sums)
+            .map(|(id, (sum, area))| {
+                let kd = self.material_of(id).kd;
+                if area > 0.0 { kd * sum / area } else { kd }
+            })
+            .collect()
+    }
+
+    /// Each corner's texture coordinates of every triangle, three per triangle in order: what the G-buffer
+    /// interpolates ((0, 0) on a mesh without textures).
+    pub fn corner_uvs(&self) -> impl Iterator<Item = Vec2> + '_ {
+        (0..self.triangles.len()).flat_map(|i| self.uvs.get(i).copied().unwrap_or([Vec2::ZERO; 3]))
     }
 
     /// The shading normal at `p` on triangle `triangle` (front side): the corners' shading normals
@@ -276,8 +362,8 @@ impl Scene {
             );
         };
         let mut warnings = obj.warnings;
-        let mesh =
-            Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| mesh_path.display().to_string())?;
+        let mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
+            .with_context(|| mesh_path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
@@ -350,7 +436,8 @@ impl Scene {
         ensure!(image.width >= 1 && image.height >= 1, "image width and height must be at least 1");
         let (obj, file_camera) = read_mesh(path)?;
         let mut warnings = obj.warnings;
-        let mesh = Mesh::new(&obj.groups, obj.materials, &mut warnings).with_context(|| path.display().to_string())?;
+        let mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
+            .with_context(|| path.display().to_string())?;
         warnings.extend(mesh.lighting_warnings());
         let (camera, placement) = match file_camera {
             Some(camera) => (camera, auto_camera::Placement::Outside),

@@ -14,8 +14,9 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
+use super::texture::Texture;
 use super::unrendered::Unrendered;
 
 /// A user error in a scene file, with its location.
@@ -35,8 +36,11 @@ fn error(file: &Path, line: Option<usize>, message: impl fmt::Display) -> LoadEr
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
+    /// The albedo, or with `kd_map` the factor its texture is multiplied by.
     pub kd: Vec3,
     pub ke: Vec3,
+    /// The index of its colour texture in the mesh's textures (`map_Kd`, glTF `baseColorTexture`).
+    pub kd_map: Option<usize>,
 }
 
 /// The largest `Kd`/`Ke` component accepted: its square must stay finite in `f32` (the reference's variance),
@@ -61,12 +65,17 @@ pub struct ObjGroup {
     /// Each triangle's corners' shading normals (`vn`, as the file gives them), or empty where some face of
     /// the group gives none: then it is shaded flat.
     pub normals: Vec<[Vec3; 3]>,
+    /// Each triangle's corners' texture coordinates, (0, 0) the image's top-left corner (an OBJ `vt` (u, v)
+    /// is (u, 1 − v)); empty where some face of the group gives none.
+    pub uvs: Vec<[Vec2; 3]>,
 }
 
 #[derive(Default)]
 pub struct ObjData {
     pub groups: Vec<ObjGroup>,
     pub materials: Vec<Material>,
+    /// The colour textures the materials name (`Material::kd_map`), each file once.
+    pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
     /// The files read: the OBJ, then each material library.
     pub files: Vec<PathBuf>,
@@ -137,14 +146,23 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let (models, materials) = loaded.map_err(|e| error(path, None, format!("OBJ parser: {e}")))?;
     let tobj_materials = materials.unwrap_or_default();
 
-    let mut materials: Vec<Material> = tobj_materials
-        .iter()
-        .map(|m| Material {
+    let mut textures = TextureFiles::default();
+    let mtl_dirs: Vec<PathBuf> = files.borrow()[1..].iter().filter_map(|f| f.parent().map(Path::to_owned)).collect();
+    let mut materials = Vec::with_capacity(tobj_materials.len() + 1);
+    for m in &tobj_materials {
+        let kd_map = match &m.diffuse_texture {
+            Some(file) => textures.find(&m.name, file, &mtl_dirs, &mut warnings)?,
+            None => None,
+        };
+        // MTL multiplies `map_Kd` by `Kd`; without a `Kd`, the texture alone.
+        let unstated = if kd_map.is_some() { 1.0 } else { Material::DEFAULT_KD };
+        materials.push(Material {
             name: m.name.clone(),
-            kd: m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(Material::DEFAULT_KD)),
+            kd: m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(unstated)),
             ke: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
-        })
-        .collect();
+            kd_map,
+        });
+    }
     let defined: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
     for (name, line) in &checked.used_materials {
         if !defined.contains(name.as_str()) {
@@ -156,7 +174,12 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
         }
     }
     let default_material = materials.len();
-    materials.push(Material { name: "(default grey)".into(), kd: Vec3::splat(Material::DEFAULT_KD), ke: Vec3::ZERO });
+    materials.push(Material {
+        name: "(default grey)".into(),
+        kd: Vec3::splat(Material::DEFAULT_KD),
+        ke: Vec3::ZERO,
+        kd_map: None,
+    });
 
     for name in checked.with_normals.intersection(&checked.without_normals) {
         warnings.push(format!(
@@ -164,29 +187,107 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             path.display()
         ));
     }
-    let groups = models
-        .into_iter()
-        .map(|model| {
-            let m = &model.mesh;
-            let at = |values: &[f32], i: u32| {
-                let i = 3 * i as usize;
-                Vec3::new(values[i], values[i + 1], values[i + 2])
-            };
-            let corners = |values: &[f32], t: &[u32]| [at(values, t[0]), at(values, t[1]), at(values, t[2])];
-            let triangles = m.indices.chunks_exact(3).map(|t| corners(&m.positions, t)).collect();
-            // Where a face names no normal, tobj makes one up from the previous corner's: such a group is
-            // shaded flat (the checking pass found it).
-            let smooth = m.normal_indices.len() == m.indices.len()
-                && !m.normal_indices.is_empty()
-                && !checked.without_normals.contains(&model.name);
-            let normals = match smooth {
-                true => m.normal_indices.chunks_exact(3).map(|t| corners(&m.normals, t)).collect(),
-                false => Vec::new(),
-            };
-            ObjGroup { name: model.name, material: m.material_id.unwrap_or(default_material), triangles, normals }
-        })
-        .collect();
-    Ok(ObjData { groups, materials, warnings, files: files.into_inner() })
+
+    let mut groups = Vec::with_capacity(models.len());
+    for model in models {
+        let m = &model.mesh;
+        let at = |values: &[f32], i: u32| {
+            let i = 3 * i as usize;
+            Vec3::new(values[i], values[i + 1], values[i + 2])
+        };
+        let corners = |values: &[f32], t: &[u32]| [at(values, t[0]), at(values, t[1]), at(values, t[2])];
+        let triangles = m.indices.chunks_exact(3).map(|t| corners(&m.positions, t)).collect();
+        // Where a face names no normal, tobj makes one up from the previous corner's: such a group is
+        // shaded flat (the checking pass found it).
+        let smooth = m.normal_indices.len() == m.indices.len()
+            && !m.normal_indices.is_empty()
+            && !checked.without_normals.contains(&model.name);
+        let normals = match smooth {
+            true => m.normal_indices.chunks_exact(3).map(|t| corners(&m.normals, t)).collect(),
+            false => Vec::new(),
+        };
+        // The same for texture coordinates; the image's rows run down, OBJ's v up.
+        let uv = |i: u32| Vec2::new(m.texcoords[2 * i as usize], 1.0 - m.texcoords[2 * i as usize + 1]);
+        let textured = m.texcoord_indices.len() == m.indices.len()
+            && !m.texcoord_indices.is_empty()
+            && !checked.without_uvs.contains(&model.name);
+        let uvs = match textured {
+            true => m.texcoord_indices.chunks_exact(3).map(|t| [uv(t[0]), uv(t[1]), uv(t[2])]).collect(),
+            false => Vec::new(),
+        };
+        let mut material = m.material_id.unwrap_or(default_material);
+        if uvs.is_empty() && materials[material].kd_map.is_some() {
+            warnings.push(format!(
+                "{}: group '{}': material '{}' has a texture, but {} faces give texture coordinates ('vt'); \
+                     using its Kd alone",
+                path.display(),
+                model.name,
+                materials[material].name,
+                if checked.with_uvs.contains(&model.name) { "not all its" } else { "none of its" }
+            ));
+            // The material's copy without its texture, for this group alone.
+            materials.push(Material { kd_map: None, ..materials[material].clone() });
+            material = materials.len() - 1;
+        }
+        groups.push(ObjGroup { name: model.name, material, triangles, normals, uvs });
+    }
+    Ok(ObjData { groups, materials, textures: textures.loaded, warnings, files: files.into_inner() })
+}
+
+/// The textures of a material library, each file read once.
+#[derive(Default)]
+struct TextureFiles {
+    loaded: Vec<Texture>,
+    /// Index in `loaded` of each file read, `None` where it could not be.
+    by_path: std::collections::HashMap<PathBuf, Option<usize>>,
+}
+
+impl TextureFiles {
+    /// The index of material `material`'s texture `file`, looked for beside each of `dirs` (the material
+    /// libraries), as written then by file name. A missing or unreadable file is a warning, and the material
+    /// keeps its `Kd` alone; a file that is no image it can decode is an error.
+    fn find(
+        &mut self,
+        material: &str,
+        file: &str,
+        dirs: &[PathBuf],
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<usize>, LoadError> {
+        // `map_Kd -o 1 1 1 wood.png`: options before the name; only the name is used.
+        let name = Path::new(file.split_whitespace().last().unwrap_or(file));
+        if file.trim_start().starts_with('-') {
+            warnings.push(format!("material '{material}': map_Kd options ignored in '{file}'"));
+        }
+        let candidates = dirs.iter().flat_map(|d| [Some(d.join(name)), name.file_name().map(|f| d.join(f))]);
+        let Some(path) = candidates.flatten().find(|p| p.is_file()) else {
+            let looked = dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ");
+            warnings.push(format!(
+                "material '{material}': texture '{}' not found (looked in {looked}); using its Kd alone",
+                name.display()
+            ));
+            return Ok(None);
+        };
+        if let Some(&index) = self.by_path.get(&path) {
+            return Ok(index);
+        }
+        let index = match std::fs::read(&path) {
+            Ok(bytes) => {
+                let texture = Texture::decode(&bytes, &path.display().to_string())
+                    .map_err(|e| error(&path, None, format!("material '{material}': {e:#}")))?;
+                self.loaded.push(texture);
+                Some(self.loaded.len() - 1)
+            }
+            Err(e) => {
+                warnings.push(format!(
+                    "material '{material}': cannot read texture {}: {e}; using its Kd alone",
+                    path.display()
+                ));
+                None
+            }
+        };
+        self.by_path.insert(path, index);
+        Ok(index)
+    }
 }
 
 /// A text file without its UTF-8 byte order mark. Only a regular file is read: a FIFO or a device named as a
@@ -234,6 +335,9 @@ struct CheckedObj {
     /// Groups (by the name tobj gives them) with a face that names normals, and with one that does not.
     with_normals: BTreeSet<String>,
     without_normals: BTreeSet<String>,
+    /// The same for texture coordinates.
+    with_uvs: BTreeSet<String>,
+    without_uvs: BTreeSet<String>,
 }
 
 fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<CheckedObj, LoadError> {
@@ -242,6 +346,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
     let mut counts = [0usize; 3]; // v, vt, vn seen so far
     let mut group = String::from(UNNAMED_GROUP);
     let (mut with_normals, mut without_normals) = (BTreeSet::new(), BTreeSet::new());
+    let (mut with_uvs, mut without_uvs) = (BTreeSet::new(), BTreeSet::new());
     let mut ignored = BTreeSet::new();
     let mut stray_dots: Vec<(usize, String)> = Vec::new();
     for (index, raw) in text.lines().enumerate() {
@@ -321,8 +426,9 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                     check_face_vertex(vertex, &counts).map_err(|m| err(format!("face vertex '{vertex}': {m}")))?;
                 }
                 if keyword == "f" {
-                    let named = args.iter().all(|v| v.split('/').nth(2).is_some_and(|n| !n.is_empty()));
-                    if named { &mut with_normals } else { &mut without_normals }.insert(group.clone());
+                    let names = |slot| args.iter().all(|v| v.split('/').nth(slot).is_some_and(|n| !n.is_empty()));
+                    if names(2) { &mut with_normals } else { &mut without_normals }.insert(group.clone());
+                    if names(1) { &mut with_uvs } else { &mut without_uvs }.insert(group.clone());
                 }
                 if keyword != "f" {
                     // Checked, then dropped: lines and points have no area to light.
@@ -368,7 +474,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
             ignored.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    Ok(CheckedObj { text: out, used_materials, with_normals, without_normals })
+    Ok(CheckedObj { text: out, used_materials, with_normals, without_normals, with_uvs, without_uvs })
 }
 
 fn parse_numbers<'a>(args: &[&'a str]) -> Result<Vec<f32>, &'a str> {

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::obj::{Material, ObjGroup};
 use super::{Surface, SurfaceId, Triangle};
@@ -23,12 +23,25 @@ pub struct Dropped {
     pub first_overflowing: Option<(String, [Vec3; 3])>,
 }
 
-/// Returns the triangles with area, with their surface ids; their corners' shading normals ([`shading`];
-/// empty where no group has any); the surfaces; and what was left out.
-pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Vec<[Vec3; 3]>, Vec<Surface>, Dropped) {
+/// What [`assign`] makes of the groups.
+pub struct Assigned {
+    /// The triangles with area, with their surface ids.
+    pub triangles: Vec<Triangle>,
+    /// Their corners' shading normals ([`shading`]); empty where no group has any.
+    pub normals: Vec<[Vec3; 3]>,
+    /// Their corners' texture coordinates (0 in a group without); empty where no group has any.
+    pub uvs: Vec<[Vec2; 3]>,
+    pub surfaces: Vec<Surface>,
+    /// What was left out.
+    pub dropped: Dropped,
+}
+
+pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> Assigned {
     let mut triangles = Vec::with_capacity(groups.iter().map(|g| g.triangles.len()).sum());
     let smooth = groups.iter().any(|g| !g.normals.is_empty());
     let mut normals = Vec::with_capacity(if smooth { triangles.capacity() } else { 0 });
+    let textured = groups.iter().any(|g| !g.uvs.is_empty());
+    let mut uvs = Vec::with_capacity(if textured { triangles.capacity() } else { 0 });
     let mut surfaces = Vec::new();
     let mut dropped = Dropped::default();
     let cos_crease = CREASE_DEG.to_radians().cos();
@@ -41,6 +54,9 @@ pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Ve
                     local.push((v, n));
                     if smooth {
                         normals.push(shading(group.normals.get(k), n));
+                    }
+                    if textured {
+                        uvs.push(group.uvs.get(k).copied().unwrap_or([Vec2::ZERO; 3]));
                     }
                 }
                 Shape::Degenerate => dropped.degenerate += 1,
@@ -96,7 +112,7 @@ pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> (Vec<Triangle>, Ve
             };
         }
     }
-    (triangles, normals, surfaces, dropped)
+    Assigned { triangles, normals, uvs, surfaces, dropped }
 }
 
 /// A triangle's corners' shading normals from the file's (`given`, if any) and its front normal `face`: each
@@ -220,9 +236,9 @@ mod tests {
         let o = Vec3::ZERO;
         let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
-        let groups = [ObjGroup { name: "box".into(), material: 0, triangles, normals: Vec::new() }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, _, surfaces, dropped) = assign(&groups, &materials);
+        let groups = [ObjGroup { name: "box".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None }];
+        let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!(dropped, Dropped::default());
         assert_eq!(surfaces.len(), 2);
         let ids: Vec<_> = tris.iter().map(|t| t.surface).collect();
@@ -239,19 +255,26 @@ mod tests {
         assert_eq!(shading(None, Vec3::X), [Vec3::X; 3]);
         // Through `assign`: only where some group gives normals, and one per kept triangle.
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let flat = [ObjGroup { name: "f".into(), material: 0, triangles: vec![[a, b, c]], normals: Vec::new() }];
-        assert!(assign(&flat, &materials).1.is_empty());
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None }];
+        let flat = [ObjGroup {
+            name: "f".into(),
+            material: 0,
+            triangles: vec![[a, b, c]],
+            normals: Vec::new(),
+            uvs: Vec::new(),
+        }];
+        assert!(assign(&flat, &materials).normals.is_empty());
         let smooth = [
             ObjGroup {
                 name: "s".into(),
                 material: 0,
                 triangles: vec![[a, b, b], [a, b, c]],
                 normals: vec![[c; 3], given],
+                uvs: Vec::new(),
             },
             flat[0].clone(),
         ];
-        let (triangles, normals, _, _) = assign(&smooth, &materials);
+        let Assigned { triangles, normals, .. } = assign(&smooth, &materials);
         assert_eq!(triangles.len(), 2, "the degenerate one dropped");
         assert_eq!(normals, [[Vec3::Z, Vec3::new(0.0, -0.6, 0.8), Vec3::Z], [Vec3::Z; 3]]);
     }
@@ -268,9 +291,9 @@ mod tests {
         // A fin: two coplanar triangles and a third at 90°, all on the edge o–x.
         let (o, x) = (Vec3::ZERO, Vec3::X);
         let triangles = vec![[o, x, Vec3::Z], [x, o, -Vec3::Z], [o, x, Vec3::Y]];
-        let groups = [ObjGroup { name: "fin".into(), material: 0, triangles, normals: Vec::new() }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, _, surfaces, _) = assign(&groups, &materials);
+        let groups = [ObjGroup { name: "fin".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None }];
+        let Assigned { triangles: tris, surfaces, .. } = assign(&groups, &materials);
         assert_eq!(surfaces.len(), 2);
         assert_eq!(tris.iter().map(|t| t.surface).collect::<Vec<_>>(), [1, 1, 2]);
     }
@@ -282,9 +305,10 @@ mod tests {
             material: 0,
             triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],
             normals: Vec::new(),
+            uvs: Vec::new(),
         }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO }];
-        let (tris, _, surfaces, dropped) = assign(&groups, &materials);
+        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None }];
+        let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!((tris.len(), surfaces.len(), dropped.degenerate), (1, 1, 1));
         assert!((tris[0].normal - Vec3::Z).length() < 1e-6);
     }

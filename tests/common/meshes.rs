@@ -43,15 +43,27 @@ pub fn plane(y: f32, n: usize) -> Vec<[Vec3; 3]> {
 /// A sphere (surface 1), a finely tessellated floor (surface 2) and a finely tessellated emitter (surface 3).
 pub fn scene() -> Mesh {
     let materials = vec![
-        Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO },
-        Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::ONE },
+        Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None },
+        Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::ONE, kd_map: None },
     ];
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down
     let groups = [
-        ObjGroup { name: "ball".into(), material: 0, triangles: sphere(Vec3::ZERO, 1.0, 64), normals: Vec::new() },
-        ObjGroup { name: "floor".into(), material: 0, triangles: plane(-1.5, 48), normals: Vec::new() },
-        ObjGroup { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new() },
+        ObjGroup {
+            name: "ball".into(),
+            material: 0,
+            triangles: sphere(Vec3::ZERO, 1.0, 64),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+        },
+        ObjGroup {
+            name: "floor".into(),
+            material: 0,
+            triangles: plane(-1.5, 48),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+        },
+        ObjGroup { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new(), uvs: Vec::new() },
     ];
-    Mesh::new(&groups, materials, &mut Vec::new()).unwrap()
+    Mesh::new(&groups, materials, Vec::new(), &mut Vec::new()).unwrap()
 }
