@@ -1,10 +1,11 @@
-//! Fuzzing the scene loaders: the scene TOML, the OBJ and the MTL, glTF (`.gltf` and `.glb`), with arbitrary
-//! and mutated-valid inputs.
+//! Fuzzing the scene loaders: the scene TOML, the OBJ and the MTL, glTF (`.gltf` and `.glb`), the texture
+//! images (PNG, JPEG, TGA), with arbitrary and mutated-valid inputs.
 //!
 //! Properties, for every input: loading never panics and ends within [`DEADLINE`]; an error names the file
 //! it is about (scene, mesh or material library), and where the loader gives a line, that line exists in that
 //! file; a loader error without a line is an I/O error ("cannot read"), never the OBJ or MTL parser's own
-//! line-less message (the checking pass must catch everything the parser would reject); a scene that loads
+//! line-less message (the checking pass must catch everything the parser would reject) or an image that does
+//! not decode (it has no lines); a scene that loads
 //! has finite triangles, unit normals, a finite camera and valid render parameters.
 //!
 //! The budget is small and fixed so that CI stays fast and repeatable: a fixed seed and a few hundred cases
@@ -106,7 +107,10 @@ impl Files {
                     let lines = text.map_or(usize::MAX, |t| t.lines().count());
                     prop_assert!(line >= 1 && line <= lines, "line {line} of {} lines: {message}", lines);
                 }
-                None => prop_assert!(e.message.starts_with("cannot read"), "no line given: {message}"),
+                None => prop_assert!(
+                    e.message.starts_with("cannot read") || e.message.contains("not a readable image"),
+                    "no line given: {message}"
+                ),
             }
         }
         if let Some(at) = message.find("at line ") {
@@ -528,6 +532,32 @@ proptest! {
             bytes.truncate((bytes.len() as f64 * f) as usize);
         }
         Files::new(&dir).write("mesh.glb", &bytes).scene(&format!("mesh = \"mesh.glb\"\n{CAMERA}")).check()?;
+    }
+
+    /// A textured quad's `map_Kd` image (a valid PNG, JPEG or TGA) with bytes changed or cut short.
+    #[test]
+    fn mutated_texture(
+        format in prop_oneof![Just("png"), Just("jpg"), Just("tga")],
+        changes in proptest::collection::vec((0usize..100_000, any::<u8>()), 0..6),
+        cut in proptest::option::of(0.0f64..1.0),
+    ) {
+        let dir = scratch("texture");
+        let name = format!("t.{format}");
+        let image = image::RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 32) as u8, (y * 32) as u8, 128]));
+        image.save(dir.join(&name)).unwrap();
+        let mut bytes = std::fs::read(dir.join(&name)).unwrap();
+        for (at, byte) in changes {
+            let n = bytes.len();
+            bytes[at % n] = byte;
+        }
+        if let Some(f) = cut {
+            bytes.truncate((bytes.len() as f64 * f) as usize);
+        }
+        let obj = "mtllib m.mtl\nusemtl a\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                   f 1/1 2/2 3/3 4/4\n";
+        Files::new(&dir).write(&name, &bytes).write("mesh.obj", obj.as_bytes())
+            .write("m.mtl", format!("newmtl a\nKe 1 1 1\nmap_Kd {name}\n").as_bytes())
+            .scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}")).check()?;
     }
 
     /// Scene files: valid ones with values replaced or keys added, cut short, or anything.

@@ -235,3 +235,61 @@ fn a_textured_group_without_coordinates_keeps_its_kd() {
     assert!(group.uvs.is_empty() && obj.materials[group.material].kd_map.is_none());
     assert_eq!(obj.textures.len(), 1);
 }
+
+/// The textured room's floor as a glTF quad whose `TEXCOORD_0` map the checker as the OBJ's `vt` do (glTF's
+/// v runs down the image), its base colour texture a PNG file beside it: the same albedo at every point.
+#[test]
+fn a_gltf_base_colour_texture_reads_as_map_kd() {
+    let dir = common::scratch("textures-gltf");
+    let room = textured_room(&dir, (32, 24));
+    let corners: [[f32; 3]; 4] = [[-1.2, 0.0, 1.0], [1.2, 0.0, 1.0], [1.2, 0.0, -1.0], [-1.2, 0.0, -1.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [2.0, 1.0], [2.0, -1.0], [0.0, -1.0]];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = bytemuck::cast_slice(&corners).to_vec();
+    bin.extend_from_slice(bytemuck::cast_slice(&uvs));
+    bin.extend_from_slice(bytemuck::cast_slice(&indices));
+    bin.extend_from_slice(&[0, 0]);
+    std::fs::write(dir.join("floor.bin"), &bin).unwrap();
+    let gltf = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "indices": 2, "material": 0 }] }],
+        "materials": [{ "name": "checker", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 } }],
+        "textures": [{ "source": 0 }],
+        "images": [{ "uri": "checker.png" }],
+        "buffers": [{ "uri": "floor.bin", "byteLength": bin.len() }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 32 },
+            { "buffer": 0, "byteOffset": 80, "byteLength": 12 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1.2, 0.0, -1.0], "max": [1.2, 0.0, 1.0] },
+            { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" },
+            { "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }
+        ]
+    });
+    let path = dir.join("floor.gltf");
+    std::fs::write(&path, serde_json::to_string(&gltf).unwrap()).unwrap();
+    let data = sensorlight::scene::gltf::load(&path).unwrap();
+    assert!(data.mesh.warnings.is_empty(), "{:?}", data.mesh.warnings);
+    assert!(data.mesh.files.contains(&dir.join("checker.png")), "the texture counts as an input");
+    let mesh =
+        sensorlight::scene::Mesh::new(&data.mesh.groups, data.mesh.materials, data.mesh.textures, &mut Vec::new())
+            .unwrap();
+    let (gltf_bvh, obj_bvh) = (Bvh::build(&mesh.triangles), Bvh::build(&room.mesh.triangles));
+    let down = |bvh: &Bvh, p: Vec3| bvh.intersect(&Ray::new(p + Vec3::Y, -Vec3::Y), 0.0, f32::INFINITY).unwrap();
+    for k in 0..40 {
+        let p = Vec3::new(-1.19 + 0.061 * k as f32, 0.0, 0.97 - 0.049 * k as f32);
+        let (a, b) = (down(&gltf_bvh, p), down(&obj_bvh, p));
+        let (a, b) = (mesh.albedo_at(a.triangle as usize, p), room.mesh.albedo_at(b.triangle as usize, p));
+        assert!((a - b).abs().max_element() < 1e-5, "at {p}: glTF {a}, OBJ {b}");
+    }
+    // Its image gone: a warning, and the factor (white) alone.
+    std::fs::remove_file(dir.join("checker.png")).unwrap();
+    let data = sensorlight::scene::gltf::load(&path).unwrap();
+    assert!(data.mesh.warnings.iter().any(|w| w.contains("checker.png") && w.contains("factor alone")));
+    assert!(data.mesh.materials[0].kd_map.is_none());
+}

@@ -6,10 +6,11 @@
 //!   (a transform that mirrors keeps the front counter-clockwise: its triangles' corners are swapped);
 //! - each triangle primitive (triangles, strips, fans) as a group, its `NORMAL`s as shading normals (made
 //!   unit by the inverse transpose); points and lines are skipped with a warning;
-//! - a material's base colour factor as `Kd` (linear RGB), its emissive factor times
+//! - a material's base colour factor as `Kd` (linear RGB) and its base colour texture (`TEXCOORD_0`) as its
+//!   colour texture (`Material::kd_map`, as an OBJ's `map_Kd`), its emissive factor times
 //!   `KHR_materials_emissive_strength` as `Ke`; `alphaMode` MASK cuts a primitive out where the factor's
-//!   alpha is under the cutoff, BLEND is drawn opaque (said); textures, metalness and roughness are named
-//!   once per material as not used yet; the glTF default material is white (`Kd` 1);
+//!   alpha is under the cutoff, BLEND is drawn opaque (said); other textures, metalness and roughness are
+//!   named once per material as not used yet; the glTF default material is white (`Kd` 1);
 //! - the first camera met in the tree (perspective), as the scene's camera where the scene file names none;
 //! - `KHR_lights_punctual`: a point or spot light becomes a small emitting sphere of 8 × 16 facets
 //!   ([`LIGHT_RADIUS`] of the scene's size) whose intensity is the light's (`Ke = 4·I / A`, `A` the facets'
@@ -21,11 +22,12 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result, bail, ensure};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
 use super::Camera;
 use super::obj::{Material, ObjData, ObjGroup};
+use super::texture::Texture;
 
 /// Extensions a file may require.
 pub const SUPPORTED: &[&str] = &["KHR_materials_emissive_strength", "KHR_lights_punctual"];
@@ -116,10 +118,23 @@ fn read(path: &Path) -> Result<GltfData> {
         gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => Some(base.join(uri)),
         _ => None,
     }));
+    files.extend(gltf.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(base.join(uri)),
+        _ => None,
+    }));
 
-    let mut reader =
-        Reader { path, buffers: &buffers, mesh: ObjData::default(), camera: None, lights: Vec::new(), instances: 0 };
-    reader.materials(&gltf.document);
+    let mut reader = Reader {
+        path,
+        base,
+        buffers: &buffers,
+        mesh: ObjData::default(),
+        images: Vec::new(),
+        untextured: Vec::new(),
+        camera: None,
+        lights: Vec::new(),
+        instances: 0,
+    };
+    reader.materials(&gltf.document)?;
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
     let Some(scene) = scene else { bail!("{}: the file has no scene", path.display()) };
     for node in scene.nodes() {
@@ -139,8 +154,14 @@ fn dedup(mut files: Vec<PathBuf>) -> Vec<PathBuf> {
 
 struct Reader<'a> {
     path: &'a Path,
+    /// Where relative URIs start.
+    base: &'a Path,
     buffers: &'a [gltf::buffer::Data],
     mesh: ObjData,
+    /// Each glTF image read so far: its index in `mesh.textures`, `None` where it could not be read.
+    images: Vec<(usize, Option<usize>)>,
+    /// Each textured material's copy without its texture, made for a primitive without `TEXCOORD_0`.
+    untextured: Vec<(usize, usize)>,
     camera: Option<Camera>,
     /// Point and spot lights met: position, colour × intensity, and the node's name.
     lights: Vec<(Vec3, Vec3, String)>,
@@ -154,16 +175,21 @@ impl Reader<'_> {
     }
 
     /// One material per glTF material, in order, then the default (white) at the end.
-    fn materials(&mut self, document: &gltf::Document) {
+    fn materials(&mut self, document: &gltf::Document) -> Result<()> {
         for m in document.materials() {
             let name = m.name().map_or_else(|| format!("material#{}", m.index().unwrap_or(0)), str::to_owned);
             let pbr = m.pbr_metallic_roughness();
             let [r, g, b, _] = pbr.base_color_factor();
             let ke = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
             let mut unused = Vec::new();
-            if pbr.base_color_texture().is_some() {
-                unused.push("its base colour texture (the factor is used)");
-            }
+            let kd_map = match pbr.base_color_texture() {
+                Some(info) if info.tex_coord() != 0 => {
+                    unused.push("its base colour texture (on TEXCOORD_1 or later; the factor is used)");
+                    None
+                }
+                Some(info) => self.image(&name, info.texture().source())?,
+                None => None,
+            };
             if m.emissive_texture().is_some() {
                 unused.push("its emissive texture (the factor is used)");
             }
@@ -176,7 +202,7 @@ impl Reader<'_> {
             if !unused.is_empty() {
                 self.warn(format!("material '{name}': {} not used", unused.join(", ")));
             }
-            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map: None });
+            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map });
         }
         self.mesh.materials.push(Material {
             name: "(glTF default, white)".into(),
@@ -184,6 +210,72 @@ impl Reader<'_> {
             ke: Vec3::ZERO,
             kd_map: None,
         });
+        Ok(())
+    }
+
+    /// The texture of `image`, read once (from a buffer view, a file or a `data:` URI) for material
+    /// `material`: a file that cannot be read is a warning (the factor alone is used), an image that cannot
+    /// be decoded an error naming it.
+    fn image(&mut self, material: &str, image: gltf::Image) -> Result<Option<usize>> {
+        if let Some(&(_, texture)) = self.images.iter().find(|(i, _)| *i == image.index()) {
+            return Ok(texture);
+        }
+        let label = image.name().map_or_else(|| format!("image#{}", image.index()), str::to_owned);
+        let bytes = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()].0;
+                let range = view.offset()..view.offset() + view.length();
+                let bytes = buffer.get(range).with_context(|| {
+                    format!("{}: image {label}: its buffer view runs past its buffer", self.path.display())
+                })?;
+                Some(bytes.to_vec())
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                match gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), Some(self.base)) {
+                    Ok(data) => Some(data.0),
+                    Err(e) => {
+                        let shown = if uri.starts_with("data:") { "(a data: URI)" } else { uri };
+                        self.warn(format!(
+                            "material '{material}': cannot read its base colour texture {shown}: {e}; the factor \
+                             alone is used"
+                        ));
+                        None
+                    }
+                }
+            }
+        };
+        let texture = match bytes {
+            Some(bytes) => {
+                let texture = Texture::decode(&bytes, &format!("{label} of {}", self.path.display()))
+                    .with_context(|| format!("{}: material '{material}'", self.path.display()))?;
+                self.mesh.textures.push(texture);
+                Some(self.mesh.textures.len() - 1)
+            }
+            None => None,
+        };
+        self.images.push((image.index(), texture));
+        Ok(texture)
+    }
+
+    /// Material `index`, or where it has a texture and the primitive `name` no texture coordinates, its copy
+    /// without the texture (said).
+    fn material_without_coordinates(&mut self, index: usize, name: &str) -> usize {
+        if self.mesh.materials[index].kd_map.is_none() {
+            return index;
+        }
+        if let Some(&(_, copy)) = self.untextured.iter().find(|(m, _)| *m == index) {
+            return copy;
+        }
+        let material = Material { kd_map: None, ..self.mesh.materials[index].clone() };
+        self.warn(format!(
+            "{name}: material '{}' has a base colour texture but the primitive no TEXCOORD_0; the factor alone is \
+             used",
+            material.name
+        ));
+        self.mesh.materials.push(material);
+        let copy = self.mesh.materials.len() - 1;
+        self.untextured.push((index, copy));
+        copy
     }
 
     /// `node` under `parent`'s transform, below the nodes `ancestors`, then its children.
@@ -267,17 +359,33 @@ impl Reader<'_> {
             if normals.as_ref().is_some_and(|n| n.len() != positions.len()) {
                 bail!("{}: NORMAL and POSITION have different counts", where_());
             }
+            let material_index = material.index().unwrap_or(self.mesh.materials.len() - 1);
+            let textured = self.mesh.materials[material_index].kd_map.is_some();
+            let uvs: Option<Vec<Vec2>> = match textured {
+                true => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),
+                false => None,
+            };
+            if uvs.as_ref().is_some_and(|t| t.len() != positions.len()) {
+                bail!("{}: TEXCOORD_0 and POSITION have different counts", where_());
+            }
+            let material_index = match uvs {
+                Some(_) => material_index,
+                None => self.material_without_coordinates(material_index, &name),
+            };
             let corners = triangles(primitive.mode(), &indices);
             let order = |t: [u32; 3]| if mirrored { [t[0], t[2], t[1]] } else { t };
             let group = ObjGroup {
                 name,
-                material: material.index().unwrap_or(self.mesh.materials.len() - 1),
+                material: material_index,
                 triangles: corners.iter().map(|&t| order(t).map(|i| positions[i as usize])).collect(),
                 normals: match &normals {
                     Some(n) => corners.iter().map(|&t| order(t).map(|i| n[i as usize])).collect(),
                     None => Vec::new(),
                 },
-                uvs: Vec::new(),
+                uvs: match &uvs {
+                    Some(t) => corners.iter().map(|&c| order(c).map(|i| t[i as usize])).collect(),
+                    None => Vec::new(),
+                },
             };
             self.mesh.groups.push(group);
         }

@@ -77,7 +77,7 @@ pub struct ObjData {
     /// The colour textures the materials name (`Material::kd_map`), each file once.
     pub textures: Vec<Texture>,
     pub warnings: Vec<String>,
-    /// The files read: the OBJ, then each material library.
+    /// The files read: the OBJ, then each material library, then the textures.
     pub files: Vec<PathBuf>,
 }
 
@@ -231,7 +231,9 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
         }
         groups.push(ObjGroup { name: model.name, material, triangles, normals, uvs });
     }
-    Ok(ObjData { groups, materials, textures: textures.loaded, warnings, files: files.into_inner() })
+    let mut files = files.into_inner();
+    files.extend(textures.by_path.into_iter().filter(|(_, t)| t.is_some()).map(|(path, _)| path));
+    Ok(ObjData { groups, materials, textures: textures.loaded, warnings, files })
 }
 
 /// The textures of a material library, each file read once.

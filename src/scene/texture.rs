@@ -37,8 +37,8 @@ pub struct Texture {
     pub levels: Vec<Level>,
 }
 
-/// Largest side accepted: beyond it, texel coordinates lose precision in `f32` and one image alone would
-/// exhaust a storage buffer.
+/// Largest side accepted (a larger image is an error, said before it is decoded): beyond it, texel
+/// coordinates lose precision in `f32` and one image alone would exhaust a storage buffer.
 pub const MAX_SIDE: u32 = 16384;
 
 impl Texture {
@@ -50,11 +50,17 @@ impl Texture {
 
     /// Decodes an image held in memory; `name` says where it came from in errors.
     pub fn decode(bytes: &[u8], name: &str) -> Result<Self> {
-        let image =
-            image::load_from_memory(bytes).with_context(|| format!("texture {name} is not a readable image"))?;
+        let unreadable = || format!("texture {name} is not a readable image");
+        let mut reader =
+            image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().with_context(unreadable)?;
+        // A header claiming a huge image is refused before anything is allocated for it.
+        let mut limits = image::Limits::default();
+        (limits.max_image_width, limits.max_image_height) = (Some(MAX_SIDE), Some(MAX_SIDE));
+        reader.limits(limits);
+        let image = reader.decode().with_context(unreadable)?;
         let (width, height) = (image.width(), image.height());
-        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-            bail!("texture {name} is {width} × {height}: each side must be 1 to {MAX_SIDE} texels");
+        if width == 0 || height == 0 {
+            bail!("texture {name} is {width} × {height}: it has no texels");
         }
         let rgba = image.to_rgba8();
         let texels = rgba.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
