@@ -16,7 +16,7 @@ use crate::gpu_types::{
     GpuEmitterChunk, GpuLightGroup, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
-use crate::scene::{Mesh, Scene, texture};
+use crate::scene::{Mesh, Scene, Texture};
 use crate::vk::{Buffer, Device, transfer};
 
 pub struct GpuScene {
@@ -251,7 +251,7 @@ impl GpuScene {
         let normals: Vec<Vec4> = mesh.corner_normals().map(|n| n.extend(0.0)).collect();
         // Without textures, placeholders that no shader reads (no surface names a texture).
         let uvs: Vec<Vec2> = if mesh.uvs.is_empty() { vec![Vec2::ZERO] } else { mesh.corner_uvs().collect() };
-        let (mut texels, mut textures) = texture::gpu_textures(&mesh.textures);
+        let (mut texels, mut textures) = gpu_textures(&mesh.textures);
         if textures.is_empty() {
             (texels, textures) = (vec![0], vec![GpuTexture::default()]);
         }
@@ -302,4 +302,42 @@ pub fn surfaces(mesh: &Mesh, lights: &Lights) -> Vec<GpuSurface> {
             }
         }))
         .collect()
+}
+
+/// Every texture's levels in one buffer, and where each texture lies in it (`scene::texture` draws the
+/// layout).
+pub fn gpu_textures(textures: &[Texture]) -> (Vec<u32>, Vec<GpuTexture>) {
+    let mut texels = Vec::with_capacity(textures.iter().map(Texture::texel_count).sum());
+    let table = textures
+        .iter()
+        .map(|t| {
+            let offset = texels.len() as u32;
+            t.levels.iter().for_each(|l| texels.extend_from_slice(&l.texels));
+            GpuTexture { offset, width: t.width(), height: t.height(), levels: t.levels.len() as u32 }
+        })
+        .collect();
+    (texels, table)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::texture::{Level, gpu_bytes};
+
+    #[test]
+    fn the_texture_table_points_at_each_textures_levels() {
+        let level = |side: u32, texel: [u8; 4]| Level {
+            width: side,
+            height: side,
+            texels: vec![u32::from_le_bytes(texel); (side * side) as usize],
+        };
+        let a = Texture::from_level("a", level(2, [1, 2, 3, 4]));
+        let b = Texture::from_level("b", level(1, [5, 6, 7, 8]));
+        let (texels, table) = gpu_textures(&[a.clone(), b]);
+        assert_eq!(texels.len(), 4 + 1 + 1);
+        assert_eq!((table[0].offset, table[0].levels), (0, 2));
+        assert_eq!((table[1].offset, table[1].width, table[1].levels), (5, 1, 1));
+        assert_eq!(texels[5], u32::from_le_bytes([5, 6, 7, 8]));
+        assert_eq!(gpu_bytes(&[a]), 20);
+    }
 }

@@ -1,7 +1,8 @@
 //! Colour textures (`map_Kd`, glTF `baseColorTexture`): decoded once, mipmapped, and sampled the same way on
 //! the CPU ([`Texture::sample`]) and in `glsl/texture.glsl`, from the same 8-bit sRGB texels.
 //!
-//! Texel layout, one buffer for every texture of a scene (`GpuTexture::offset` is where each begins):
+//! Texel layout on the GPU, one buffer for every texture of a scene (`GpuTexture::offset` is where each
+//! begins):
 //!
 //! ```text
 //!   level 0: width × height texels, row by row (row 0 is the image's top)
@@ -9,7 +10,8 @@
 //!   …        down to 1 × 1: the texture's mean colour
 //! ```
 //!
-//! A texel is RGBA8 with sRGB-encoded colour and linear alpha, packed as one `u32` (R in the low byte).
+//! A texel is RGBA8 with sRGB-encoded colour and linear alpha, packed as one `u32` (R in the low byte);
+//! `gpu_scene::gpu_textures` lays the textures out so and writes each one's `GpuTexture`.
 //! Filtering happens after decoding (linear light), as a GPU's sRGB formats do. Coordinates repeat (the
 //! default of OBJ and glTF); (0, 0) is the image's top-left corner, so an OBJ `vt` reads as (u, 1 − v).
 
@@ -17,8 +19,6 @@ use std::path::Path;
 
 use anyhow::{Context as _, Result, bail};
 use glam::{Vec2, Vec4};
-
-use crate::gpu_types::GpuTexture;
 
 /// One image level: `width` × `height` packed texels.
 #[derive(Clone, Debug, PartialEq)]
@@ -165,20 +165,6 @@ pub fn encode(c: Vec4) -> u32 {
     u32::from_le_bytes([r, g, b, byte(c.w)])
 }
 
-/// Every texture's levels in one buffer, and where each texture lies in it (see the module docs).
-pub fn gpu_textures(textures: &[Texture]) -> (Vec<u32>, Vec<GpuTexture>) {
-    let mut texels = Vec::with_capacity(textures.iter().map(Texture::texel_count).sum());
-    let table = textures
-        .iter()
-        .map(|t| {
-            let offset = texels.len() as u32;
-            t.levels.iter().for_each(|l| texels.extend_from_slice(&l.texels));
-            GpuTexture { offset, width: t.width(), height: t.height(), levels: t.levels.len() as u32 }
-        })
-        .collect();
-    (texels, table)
-}
-
 /// Bytes the textures take on the GPU.
 pub fn gpu_bytes(textures: &[Texture]) -> u64 {
     4 * textures.iter().map(|t| t.texel_count() as u64).sum::<u64>()
@@ -242,17 +228,5 @@ mod tests {
     fn a_corrupt_image_is_an_error_naming_it() {
         let e = Texture::decode(b"\x89PNG\r\n\x1a\nnot really", "wood.png").unwrap_err();
         assert!(format!("{e:#}").contains("texture wood.png is not a readable image"), "{e:#}");
-    }
-
-    #[test]
-    fn the_gpu_table_points_at_each_textures_levels() {
-        let a = texture(2, 2, &[[1, 2, 3, 4]; 4]);
-        let b = texture(1, 1, &[[5, 6, 7, 8]]);
-        let (texels, table) = gpu_textures(&[a.clone(), b]);
-        assert_eq!(texels.len(), 4 + 1 + 1);
-        assert_eq!((table[0].offset, table[0].levels), (0, 2));
-        assert_eq!((table[1].offset, table[1].width, table[1].levels), (5, 1, 1));
-        assert_eq!(texels[5], u32::from_le_bytes([5, 6, 7, 8]));
-        assert_eq!(gpu_bytes(&[a]), 20);
     }
 }
