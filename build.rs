@@ -3,6 +3,8 @@
 //!
 //! - Stages come from the extension (`.vert`, `.frag`, `.comp`); `.glsl` files are includes only.
 //! - `#include "x.glsl"` resolves next to the including file, then in `glsl/`.
+//! - A line `// variant: NAME [why]` in a shader compiles it a second time with `NAME` defined, as
+//!   `crate::shaders::<FILE>_<NAME>` (`glsl/sensor.frag` with `CUTOUTS`: `SENSOR_FRAG_CUTOUTS`).
 //! - A compile error fails the build with glslang's `file:line: error` text.
 //! - Cargo reruns this script when any shader or include changes, or when a file is added to `glsl/`.
 
@@ -39,29 +41,40 @@ fn main() {
         let file_name = path.file_name().unwrap().to_str().unwrap().to_owned();
         let source = fs::read_to_string(path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
 
-        let mut options = shaderc::CompileOptions::new().unwrap();
-        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
-        options.set_warnings_as_errors();
-        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-        options.set_include_callback(|requested, _kind, requester, _depth| {
-            let resolved = resolve_include(&glsl_dir, requester, requested)?;
-            includes.borrow_mut().insert(resolved.clone());
-            let content = fs::read_to_string(&resolved).map_err(|e| format!("{}: {e}", resolved.display()))?;
-            Ok(shaderc::ResolvedInclude { resolved_name: resolved.to_string_lossy().into_owned(), content })
-        });
-
-        let stage = stage_of(path).unwrap();
-        match compiler.compile_into_spirv(&source, stage, &path.to_string_lossy(), "main", Some(&options)) {
-            Ok(artifact) => {
-                let spv = out_dir.join(format!("{file_name}.spv"));
-                fs::write(&spv, artifact.as_binary_u8()).unwrap();
-                let constant = file_name.replace(['.', '-'], "_").to_uppercase();
-                writeln!(generated, "/// SPIR-V of `glsl/{file_name}`.").unwrap();
-                writeln!(generated, "pub const {constant}: &[u8] = include_bytes!({:?});", spv.display().to_string())
-                    .unwrap();
-                names.push((file_name, constant));
+        let variants = source.lines().filter_map(|l| l.trim().strip_prefix("// variant:")?.split_whitespace().next());
+        for variant in std::iter::once(None).chain(variants.map(Some)) {
+            let mut options = shaderc::CompileOptions::new().unwrap();
+            options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+            options.set_warnings_as_errors();
+            options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+            if let Some(name) = variant {
+                options.add_macro_definition(name, None);
             }
-            Err(error) => errors.push(error.to_string()),
+            options.set_include_callback(|requested, _kind, requester, _depth| {
+                let resolved = resolve_include(&glsl_dir, requester, requested)?;
+                includes.borrow_mut().insert(resolved.clone());
+                let content = fs::read_to_string(&resolved).map_err(|e| format!("{}: {e}", resolved.display()))?;
+                Ok(shaderc::ResolvedInclude { resolved_name: resolved.to_string_lossy().into_owned(), content })
+            });
+
+            let stage = stage_of(path).unwrap();
+            let name = match variant {
+                Some(v) => format!("{file_name} ({v})"),
+                None => file_name.clone(),
+            };
+            match compiler.compile_into_spirv(&source, stage, &path.to_string_lossy(), "main", Some(&options)) {
+                Ok(artifact) => {
+                    let suffix = variant.map(|v| format!("_{v}")).unwrap_or_default();
+                    let spv = out_dir.join(format!("{file_name}{suffix}.spv"));
+                    fs::write(&spv, artifact.as_binary_u8()).unwrap();
+                    let constant = format!("{}{suffix}", file_name.replace(['.', '-'], "_").to_uppercase());
+                    writeln!(generated, "/// SPIR-V of `glsl/{name}`.").unwrap();
+                    let path = spv.display().to_string();
+                    writeln!(generated, "pub const {constant}: &[u8] = include_bytes!({path:?});").unwrap();
+                    names.push((name, constant));
+                }
+                Err(error) => errors.push(error.to_string()),
+            }
         }
     }
     for include in includes.borrow().iter() {

@@ -25,6 +25,10 @@ void main() {
     out_normal = vec4(front ? n : -n, front ? 1.0 : 0.0);
     // Kd times its texture's mean over the pixel; untextured, Kd.
     vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
+    // A cut-out is tested at the pixel centre (the ray cast's point): the pixel sees the surface or not.
+    if (s.alpha_map != 0u && sample_texture(s.alpha_map - 1u, in_uv, 0.0).a < s.alpha_threshold) {
+        discard;
+    }
     vec3 albedo = s.kd_factor.rgb;
     if (s.kd_map != 0u) {
         albedo *= sample_footprint(s.kd_map - 1u, in_uv, dx, dy).rgb;

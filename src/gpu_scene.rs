@@ -30,6 +30,8 @@ pub struct GpuScene {
     /// The colour textures: a `GpuTexture` each, and every level's packed texels (`scene::texture`).
     pub textures: Arc<Buffer>,
     pub texels: Arc<Buffer>,
+    /// Whether a surface has a cut-out (the sensor maps then discard fragments: `sensor_cutout.frag`).
+    pub cutouts: bool,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
     /// The emitters, group by group (`GpuEmitter`); them in chunks of at most `EMITTER_CHUNK`
@@ -90,6 +92,8 @@ impl GpuCache {
 /// indices, and the clusters as the culling pass reads them.
 pub struct GpuClusters {
     pub vertices: Arc<Buffer>,
+    /// Their texture coordinates where the mesh has cut-outs (else a placeholder no shader reads).
+    pub uvs: Arc<Buffer>,
     pub indices: Arc<Buffer>,
     /// `GpuCluster` each.
     pub clusters: Arc<Buffer>,
@@ -117,7 +121,9 @@ impl GpuClusters {
             .map(|(&position, &surface)| Vertex { position, surface })
             .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let uvs = if mesh.has_cutouts() { cluster_uvs(mesh, hierarchy) } else { vec![Vec2::ZERO] };
         Ok(Self {
+            uvs: Arc::new(transfer::upload(device, "cluster texture coordinates", &uvs, storage)?),
             vertices: Arc::new(transfer::upload(
                 device,
                 "cluster vertices",
@@ -139,6 +145,22 @@ impl GpuClusters {
             full_detail_triangles: hierarchy.full_detail_triangles() as u64,
         })
     }
+}
+
+/// The texture coordinates of each of the hierarchy's vertices: those of a corner of the mesh's at the
+/// same position on the same surface. Welding and simplifying keep the mesh's own vertices, so every one has
+/// such a corner; where a surface's texture has a seam there, the first corner's.
+pub fn cluster_uvs(mesh: &Mesh, hierarchy: &ClusterMesh) -> Vec<Vec2> {
+    let key = |p: Vec3, surface: u32| (p.to_array().map(f32::to_bits), surface);
+    let mut corners = std::collections::HashMap::new();
+    for (t, uvs) in mesh.triangles.iter().zip(&mesh.uvs) {
+        for (p, uv) in t.v.iter().zip(uvs) {
+            corners.entry(key(*p, t.surface)).or_insert(*uv);
+        }
+    }
+    (hierarchy.positions.iter().zip(&hierarchy.vertex_surface))
+        .map(|(&p, &s)| corners.get(&key(Vec3::from(p), s)).copied().unwrap_or(Vec2::ZERO))
+        .collect()
 }
 
 /// The clusters as the culling pass reads them; `emitter(surface)` says which surfaces emit.
@@ -268,6 +290,7 @@ impl GpuScene {
             uvs: Arc::new(transfer::upload(device, "corner texture coordinates", &uvs, storage)?),
             textures: Arc::new(transfer::upload(device, "texture table", &textures, storage)?),
             texels: Arc::new(transfer::upload(device, "texels", &texels, storage)?),
+            cutouts: mesh.has_cutouts(),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
             chunk_count: chunks.len() as u32,
@@ -292,13 +315,17 @@ pub fn surfaces(mesh: &Mesh, lights: &Lights) -> Vec<GpuSurface> {
             let m = mesh.material_of(id);
             let group = lights.surface_group.get(&id).map_or(0.0, |&g| g as f32 + 1.0);
             // A texture applies where the mesh has texture coordinates.
-            let kd_map = m.kd_map.filter(|_| !mesh.uvs.is_empty()).map_or(0, |t| t as u32 + 1);
+            let placed = !mesh.uvs.is_empty();
+            let kd_map = m.kd_map.filter(|_| placed).map_or(0, |t| t as u32 + 1);
+            let cutout = m.cutout.filter(|_| placed);
             GpuSurface {
                 kd: mesh.surface_albedo(id).extend(0.0),
                 ke: m.ke.extend(group),
                 kd_factor: m.kd.extend(0.0),
                 kd_map,
-                _pad: [0; 3],
+                alpha_map: cutout.map_or(0, |c| c.map as u32 + 1),
+                alpha_threshold: cutout.map_or(0.0, |c| c.threshold),
+                _pad: 0,
             }
         }))
         .collect()

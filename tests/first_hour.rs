@@ -99,14 +99,14 @@ fn a_stray_dot_after_a_number_renders_with_a_warning() {
     );
 }
 
-/// Mirrors, glass and textures render as plain diffuse: said once per material, naming what is ignored;
+/// Mirrors, glass and bump maps render as plain diffuse: said once per material, naming what is ignored;
 /// what exporters write on diffuse materials (`Ks 0 0 0`, `illum 2`, `Ni 1.5` on an opaque wall) is not.
 #[test]
 fn ignored_material_data_is_said_once_per_material() {
     let dir = common::scratch("unrendered");
     let mtl = "newmtl glass\nKd 0.2 0.2 0.2\nNi 1.5\nTf 0.9 0.9 0.9\nillum 7\n\
                newmtl wall\nKd 0.7 0.7 0.7\nKs 0 0 0\nNs 10\nNi 1.5\nillum 2\n\
-               newmtl brick\nKd 0.5 0.2 0.1\nmap_Kd brick.png\nmap_Kd brick.png\n";
+               newmtl brick\nKd 0.5 0.2 0.1\nbump brick.png\nbump brick.png\n";
     std::fs::write(dir.join("materials.mtl"), mtl).unwrap();
     let obj = "mtllib materials.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl glass\nf 1 2 3\nusemtl wall\nf 2 4 3\n\
                usemtl brick\nf 1 3 4\nusemtl glass\nf 1 2 4\n";
@@ -120,7 +120,7 @@ fn ignored_material_data_is_said_once_per_material() {
     );
     assert_eq!(said.len(), 2, "{:?}", scene.warnings);
     assert_eq!(said[0], &glass);
-    assert!(said[1].ends_with("material 'brick': map_Kd ignored (treated as diffuse)"), "{}", said[1]);
+    assert!(said[1].ends_with("material 'brick': bump ignored (treated as diffuse)"), "{}", said[1]);
 }
 
 /// `-o out.png` writes the PNG alone; `-o out.exr` the EXR and the PNG beside it; another kind is refused

@@ -154,9 +154,10 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
             kd: Vec3::splat(0.5),
             ke: Vec3::ZERO,
             kd_map: None,
+            cutout: None,
         }],
-        textures: Vec::new(),
-        albedo: vec![Vec3::splat(0.5)],
+        textures: Default::default(),
+        texture_mean: vec![Vec3::ONE],
     };
     for resolution in [1, 2, 7] {
         let cache = RadianceCache::build(&mesh, resolution, &[], None);

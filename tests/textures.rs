@@ -287,9 +287,142 @@ fn a_gltf_base_colour_texture_reads_as_map_kd() {
         let (a, b) = (mesh.albedo_at(a.triangle as usize, p), room.mesh.albedo_at(b.triangle as usize, p));
         assert!((a - b).abs().max_element() < 1e-5, "at {p}: glTF {a}, OBJ {b}");
     }
+    // MASK: cut out where factor alpha × texture alpha < cutoff, the texture's alpha tested against 0.4 / 0.8.
+    let mut masked = gltf.clone();
+    masked["materials"][0]["alphaMode"] = "MASK".into();
+    masked["materials"][0]["alphaCutoff"] = 0.4.into();
+    masked["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 0.8]);
+    std::fs::write(&path, serde_json::to_string(&masked).unwrap()).unwrap();
+    let data = sensorlight::scene::gltf::load(&path).unwrap();
+    let cutout = data.mesh.materials[0].cutout.expect("a MASK material with a texture is cut out");
+    assert_eq!((cutout.map, cutout.threshold), (data.mesh.materials[0].kd_map.unwrap(), 0.5));
     // Its image gone: a warning, and the factor (white) alone.
     std::fs::remove_file(dir.join("checker.png")).unwrap();
     let data = sensorlight::scene::gltf::load(&path).unwrap();
     assert!(data.mesh.warnings.iter().any(|w| w.contains("checker.png") && w.contains("factor alone")));
     assert!(data.mesh.materials[0].kd_map.is_none());
+}
+
+/// A floor lit through a card held between it and a square light: the card's `map_d` (a grey PNG, no
+/// alpha: its red is the mask) cuts 4 × 4 square holes in it, so its shadow is a grid of light squares.
+fn card_over_a_floor(dir: &Path, size: (u32, u32)) -> Scene {
+    write_png(&dir.join("holes.png"), 8, 8, |x, y| if x % 2 == 1 && y % 2 == 1 { [0, 0, 0] } else { [255, 255, 255] });
+    write_png(&dir.join("leaf.png"), 2, 2, |x, _| if x == 0 { [60, 160, 40] } else { [90, 200, 60] });
+    let obj = "mtllib card.mtl\n\
+               g floor\nusemtl grey\nv -1.5 0 1.5\nv 1.5 0 1.5\nv 1.5 0 -1.5\nv -1.5 0 -1.5\nf 1 2 3 4\n\
+               g card\nusemtl leaf\nv -0.5 0.6 0.5\nv 0.5 0.6 0.5\nv 0.5 0.6 -0.5\nv -0.5 0.6 -0.5\n\
+               vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 5/1 6/2 7/3 8/4\n\
+               g light\nusemtl lamp\nv -0.3 1.5 -0.3\nv -0.3 1.5 0.3\nv 0.3 1.5 0.3\nv 0.3 1.5 -0.3\nf 9 12 11 10\n";
+    std::fs::write(dir.join("card.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("card.mtl"),
+        "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl leaf\nmap_Kd leaf.png\nmap_d holes.png\nnewmtl lamp\nKd 0 0 0\nKe 20 20 20\n",
+    )
+    .unwrap();
+    let toml = format!(
+        "mesh = \"card.obj\"\n[camera]\neye = [0.0, 1.7, 1.5]\ntarget = [0.0, 0.2, 0.0]\nup = [0, 1, 0]\n\
+         vfov_deg = 50\n[image]\nwidth = {}\nheight = {}\n",
+        size.0, size.1
+    );
+    std::fs::write(dir.join("card.toml"), toml).unwrap();
+    Scene::load(&dir.join("card.toml")).unwrap()
+}
+
+/// Rays pass through the card's holes and stop on the rest of it, by its mask at the point hit; a BVH built
+/// from the triangles alone (no mesh) sees the card whole.
+#[test]
+fn rays_pass_through_cut_outs() {
+    let dir = common::scratch("cutouts-rays");
+    let scene = card_over_a_floor(&dir, (32, 24));
+    assert!(scene.mesh.has_cutouts());
+    let (cut, whole) = (Bvh::of_mesh(&scene.mesh), Bvh::build(&scene.mesh.triangles));
+    let card = surface(&scene, "card/");
+    let down = |bvh: &Bvh, x: f32, z: f32| {
+        let hit = bvh.intersect(&Ray::new(Vec3::new(x, 1.0, z), -Vec3::Y), 0.0, f32::INFINITY).unwrap();
+        scene.mesh.triangles[hit.triangle as usize].surface
+    };
+    // The card spans x, z ∈ [−0.5, 0.5], u = x + 0.5 and v (down the image) = z + 0.5: 8 texels of 0.125,
+    // holes in the odd columns and rows.
+    let (hole, solid) = (-0.5 + 1.5 * 0.125, -0.5 + 0.5 * 0.125);
+    assert_ne!(down(&cut, hole, hole), card, "through a hole");
+    assert_eq!(down(&cut, solid, hole), card);
+    assert_eq!(down(&cut, solid, solid), card);
+    assert_eq!(down(&whole, hole, hole), card, "without the mesh, no cut-outs");
+}
+
+/// The rasterised G-buffer cuts the card where its ray-cast twin does: the same surface at every pixel but
+/// a few where a hole's edge crosses the pixel centre.
+#[test]
+fn the_gbuffer_cuts_as_its_ray_cast_twin() {
+    let dir = common::scratch("cutouts-gbuffer");
+    let size = ImageSize { width: 96, height: 72 };
+    let scene = card_over_a_floor(&dir, (size.width, size.height));
+    let cpu = cast::cast(&scene, &Bvh::of_mesh(&scene.mesh), size);
+    let gpu = common::gpu(|device| common::raster_gbuffer(device, &scene, size).2);
+    let card = surface(&scene, "card/");
+    let on_card = gpu.surface.iter().filter(|&&s| s == card).count();
+    let holes = cpu.surface.iter().zip(&gpu.surface).filter(|&(&c, &g)| c != card && g != card).count();
+    let differ = cpu.surface.iter().zip(&gpu.surface).filter(|(c, g)| c != g).count();
+    let whole = cast::cast(&scene, &Bvh::build(&scene.mesh.triangles), size);
+    let uncut = whole.surface.iter().filter(|&&s| s == card).count();
+    assert!(on_card > 800 && on_card < uncut * 19 / 20, "{on_card} card pixels of {uncut} uncut");
+    assert!(
+        holes > 0 && differ * 50 < uncut - on_card,
+        "{differ} pixels differ, {} seen through holes",
+        uncut - on_card
+    );
+}
+
+/// Direct light through the card's holes at the defaults, against the oracle over pixel squares (which casts
+/// its shadow rays through the same holes): within 2 % inside and over the whole image.
+#[test]
+fn light_through_cut_outs_within_two_percent_of_the_oracle() {
+    let dir = common::scratch("cutouts-oracle");
+    let scene = card_over_a_floor(&dir, (128, 96));
+    let [on, _] = common::against_the_area_oracle(&scene, 0.0, 1024);
+    assert!(on.interior.own_error.unwrap() <= 0.02, "interior {:?}", on.interior);
+    assert!(on.whole.own_error.unwrap() <= 0.02, "whole image {:?}", on.whole);
+}
+
+/// The sensor maps cut the card out whether drawn from the triangle soup or from the cluster hierarchy
+/// (whose vertices take the mesh's texture coordinates): the same R; and the light through the holes is
+/// there: R on the floor in view is higher than under the card drawn whole.
+#[test]
+fn sensor_maps_cut_out_alike_from_clusters_and_from_the_soup() {
+    use sensorlight::params::EstimatorKind;
+    use sensorlight::renderer::{Detail, Quiet, Renderer};
+    use sensorlight::sensors::SensorKind;
+    use sensorlight::strategy::StrategyKind;
+    let dir = common::scratch("cutouts-clusters");
+    let scene = card_over_a_floor(&dir, (40, 30));
+    let setup = common::every_pixel(SensorKind::Hemicube, 16, 0.1);
+    let r = |scene: &Scene, detail| {
+        common::gpu(|device| {
+            let mut renderer = Renderer::builder(device, scene, SensorKind::Hemicube, 16)
+                .estimator(EstimatorKind::Exact)
+                .detail(detail)
+                .build_unchecked(StrategyKind::Layered)
+                .unwrap();
+            assert_eq!(renderer.culled(), detail == Detail::Clusters);
+            let out = renderer.render(scene.image, &setup.frame, &Quiet).unwrap();
+            (out.radiance, out.gbuffer.surface)
+        })
+    };
+    let ((soup, ids), (clusters, _)) = (r(&scene, Detail::Full), r(&scene, Detail::Clusters));
+    let worst = soup.iter().zip(&clusters).map(|(a, b)| (*a - *b).abs().max_element()).fold(0.0f32, f32::max);
+    let brightest = soup.iter().map(|a| a.max_element()).fold(0.0f32, f32::max);
+    assert!(worst <= 1e-3 * brightest, "R differs by {worst} of {brightest}");
+    // The card drawn whole (its map_d gone) shades the floor more: the holes let light through.
+    std::fs::write(
+        dir.join("card.mtl"),
+        "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl leaf\nmap_Kd leaf.png\nnewmtl lamp\nKd 0 0 0\nKe 20 20 20\n",
+    )
+    .unwrap();
+    let (whole, whole_ids) = r(&Scene::load(&dir.join("card.toml")).unwrap(), Detail::Full);
+    let floor = surface(&scene, "floor/");
+    let on_floor = |r: &[Vec4]| {
+        (0..r.len()).filter(|&i| ids[i] == floor && whole_ids[i] == floor).map(|i| r[i].x as f64).sum::<f64>()
+    };
+    let (through, shaded) = (on_floor(&soup), on_floor(&whole));
+    assert!(through > 1.02 * shaded, "R on the floor: {through} through the holes, {shaded} under the whole card");
 }

@@ -172,8 +172,8 @@ mod tests {
             groups.push((names[i].as_str(), 1, rect(*c, Vec3::X * 0.1, Vec3::Z * 0.1, -Vec3::Y)));
         }
         let materials = vec![
-            Material { name: "white".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None },
-            Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::splat(10.0), kd_map: None },
+            Material { name: "white".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None, cutout: None },
+            Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::splat(10.0), kd_map: None, cutout: None },
         ];
         let camera = Camera::look_at(Vec3::new(0.0, 5.0, 5.0), Vec3::ZERO, Vec3::Y, 60.0).unwrap();
         from_groups(groups, materials, camera, ImageSize { width: 4, height: 4 }).mesh

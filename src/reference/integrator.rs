@@ -149,7 +149,7 @@ impl<'a> Integrator<'a> {
             SensorKind::Hemicube => None,
         };
         Ok(Self {
-            bvh: Bvh::build(&scene.mesh.triangles),
+            bvh: Bvh::of_mesh(&scene.mesh),
             bias: frame::BIAS * scene.mesh.scale(),
             near: frame::NEAR * scene.mesh.scale(),
             scene,

@@ -115,6 +115,7 @@ mod tests {
             kd: Vec3::splat(0.5),
             ke: Vec3::splat(ke),
             kd_map: None,
+            cutout: None,
         };
         let materials = ke.iter().enumerate().map(|(i, &k)| material(&format!("m{i}"), k)).collect();
         let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 60.0).unwrap();

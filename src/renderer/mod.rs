@@ -520,7 +520,7 @@ impl Renderer {
         let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
         // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
         // cache's pieces are halved.
-        let bvh = Bvh::build(&scene.mesh.triangles);
+        let bvh = Bvh::of_mesh(&scene.mesh);
         let light_points = (layout.groups > 0).then(|| hints::light_points(&lights));
         let shadow_points = (layout.groups > 0).then(|| ShadowPoints::new(&lights));
         if let Some(c) = config.cache {

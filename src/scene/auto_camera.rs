@@ -73,7 +73,7 @@ pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
     if lights.is_empty() {
         return Ok(None); // nothing lit to see from inside: the cheap answer first, before any ray
     }
-    let bvh = Bvh::build(&mesh.triangles);
+    let bvh = Bvh::of_mesh(mesh);
     let eps = 1e-5 * mesh.scale();
     let distance = |dir: Vec3| bvh.intersect(&Ray::new(centre, dir), eps, f32::INFINITY).map(|h| h.t);
     let hits = (0..PROBE_RAYS).filter(|&k| distance(fibonacci_direction(k, PROBE_RAYS)).is_some()).count();
@@ -230,6 +230,7 @@ mod inside_tests {
             kd: Vec3::splat(kd),
             ke: Vec3::splat(ke),
             kd_map: None,
+            cutout: None,
         };
         let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0).unwrap();
         from_groups(groups, vec![m("white", 0.7, 0.0), m("light", 0.0, 5.0)], camera, DEFAULT_IMAGE).mesh

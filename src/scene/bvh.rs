@@ -1,11 +1,15 @@
 //! A bounding volume hierarchy over the scene's triangles, built with binned SAH (Wald 2007), traversed
 //! nearest child first. Leaves store copies of their triangles' vertices for locality. The CPU reference
-//! traces with it, and the refinement casts its shadow-ray hints (`sensors::hints`).
+//! traces with it, and the refinement casts its shadow-ray hints (`sensors::hints`). Built for a mesh
+//! ([`Bvh::of_mesh`]), its rays pass through the mesh's cut-outs.
 
-use glam::Vec3;
+use std::sync::Arc;
 
+use glam::{Vec2, Vec3};
+
+use super::obj::Cutout;
 use super::ray::{Ray, RayShear};
-use super::{Aabb, Triangle};
+use super::{Aabb, Mesh, Texture, Triangle};
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
@@ -26,6 +30,24 @@ pub struct Bvh {
     vertices: Vec<[Vec3; 3]>,
     /// Original triangle index of each stored triangle.
     order: Vec<u32>,
+    /// Where the mesh it was built from has cut-outs ([`Bvh::of_mesh`]), rays pass through them.
+    cutouts: Option<Cutouts>,
+}
+
+/// The cut-outs of the stored triangles: each one's texture coordinates and alpha test, if it has one.
+struct Cutouts {
+    tests: Vec<Option<([Vec2; 3], Cutout)>>,
+    textures: Arc<Vec<Texture>>,
+}
+
+impl Cutouts {
+    /// Whether stored triangle `k` (corners `v`) exists at `p` (as `Mesh::opaque_at`).
+    fn opaque(&self, k: usize, v: &[Vec3; 3], p: Vec3) -> bool {
+        let Some((uvs, cutout)) = &self.tests[k] else { return true };
+        let [b0, b1, b2] = super::barycentric(v, p);
+        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
+        self.textures[cutout.map].sample(uv, 0.0).w >= cutout.threshold
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,11 +100,33 @@ impl Bvh {
             stack.push((left + 1, mid, end));
         }
         let vertices = order.iter().map(|&i| triangles[i as usize].v).collect();
-        Self { nodes, vertices, order }
+        Self { nodes, vertices, order, cutouts: None }
+    }
+
+    /// The BVH of `mesh`'s triangles, through whose cut-outs (`Material::cutout`) rays pass.
+    pub fn of_mesh(mesh: &Mesh) -> Self {
+        let mut bvh = Self::build(&mesh.triangles);
+        if mesh.has_cutouts() {
+            let test = |i: usize| {
+                let cutout = mesh.material_of(mesh.triangles[i].surface).cutout?;
+                Some((mesh.uvs[i], cutout))
+            };
+            let tests = bvh.order.iter().map(|&i| test(i as usize)).collect();
+            bvh.cutouts = Some(Cutouts { tests, textures: mesh.textures.clone() });
+        }
+        bvh
     }
 
     /// The nearest hit in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        match &self.cutouts {
+            Some(c) => self.intersect_where(ray, t_min, t_max, |k, t| c.opaque(k, &self.vertices[k], ray.at(t))),
+            None => self.intersect_where(ray, t_min, t_max, |_, _| true),
+        }
+    }
+
+    /// The nearest hit in `(t_min, t_max)` that `accept(stored triangle, t)`.
+    fn intersect_where(&self, ray: &Ray, t_min: f32, t_max: f32, accept: impl Fn(usize, f32) -> bool) -> Option<Hit> {
         let shear = RayShear::new(ray);
         let inv = ray.dir.recip();
         let mut best: Option<Hit> = None;
@@ -100,6 +144,7 @@ impl Bvh {
                 for k in range {
                     if let Some(t) = shear.intersect(&self.vertices[k], t_best)
                         && t > t_min
+                        && accept(k, t)
                     {
                         t_best = t;
                         best = Some(Hit { t, triangle: self.order[k] });

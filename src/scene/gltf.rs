@@ -9,7 +9,8 @@
 //! - a material's base colour factor as `Kd` (linear RGB) and its base colour texture (`TEXCOORD_0`) as its
 //!   colour texture (`Material::kd_map`, as an OBJ's `map_Kd`), its emissive factor times
 //!   `KHR_materials_emissive_strength` as `Ke`; `alphaMode` MASK cuts a primitive out where the factor's
-//!   alpha is under the cutoff, BLEND is drawn opaque (said); other textures, metalness and roughness are
+//!   alpha is under the cutoff, and with a base colour texture where factor × texture alpha is
+//!   (`obj::Cutout`), BLEND is drawn opaque (said); other textures, metalness and roughness are
 //!   named once per material as not used yet; the glTF default material is white (`Kd` 1);
 //! - the first camera met in the tree (perspective), as the scene's camera where the scene file names none;
 //! - `KHR_lights_punctual`: a point or spot light becomes a small emitting sphere of 8 × 16 facets
@@ -26,7 +27,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
 use super::Camera;
-use super::obj::{Material, ObjData, ObjGroup};
+use super::obj::{Cutout, Material, ObjData, ObjGroup};
 use super::texture::Texture;
 
 /// Extensions a file may require.
@@ -179,7 +180,7 @@ impl Reader<'_> {
         for m in document.materials() {
             let name = m.name().map_or_else(|| format!("material#{}", m.index().unwrap_or(0)), str::to_owned);
             let pbr = m.pbr_metallic_roughness();
-            let [r, g, b, _] = pbr.base_color_factor();
+            let [r, g, b, alpha] = pbr.base_color_factor();
             let ke = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
             let mut unused = Vec::new();
             let kd_map = match pbr.base_color_texture() {
@@ -199,16 +200,29 @@ impl Reader<'_> {
             if m.alpha_mode() == gltf::material::AlphaMode::Blend {
                 unused.push("alpha blending (drawn opaque)");
             }
+            // MASK with a texture: cut out where factor × texture alpha < cutoff (a factor under the cutoff
+            // cuts the whole primitive out, in `mesh_at`).
+            let mut cutout = match (m.alpha_mode(), kd_map) {
+                (gltf::material::AlphaMode::Mask, Some(map)) if alpha > 0.0 => {
+                    Some(Cutout { map, threshold: m.alpha_cutoff().unwrap_or(0.5) / alpha })
+                }
+                _ => None,
+            };
+            if cutout.is_some() && ke.max_element() > 0.0 {
+                unused.push("alpha mask (an emitter is not cut out)");
+                cutout = None;
+            }
             if !unused.is_empty() {
                 self.warn(format!("material '{name}': {} not used", unused.join(", ")));
             }
-            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map });
+            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map, cutout });
         }
         self.mesh.materials.push(Material {
             name: "(glTF default, white)".into(),
             kd: Vec3::ONE,
             ke: Vec3::ZERO,
             kd_map: None,
+            cutout: None,
         });
         Ok(())
     }
@@ -260,16 +274,16 @@ impl Reader<'_> {
     /// Material `index`, or where it has a texture and the primitive `name` no texture coordinates, its copy
     /// without the texture (said).
     fn material_without_coordinates(&mut self, index: usize, name: &str) -> usize {
-        if self.mesh.materials[index].kd_map.is_none() {
+        if self.mesh.materials[index].kd_map.is_none() && self.mesh.materials[index].cutout.is_none() {
             return index;
         }
         if let Some(&(_, copy)) = self.untextured.iter().find(|(m, _)| *m == index) {
             return copy;
         }
-        let material = Material { kd_map: None, ..self.mesh.materials[index].clone() };
+        let material = Material { kd_map: None, cutout: None, ..self.mesh.materials[index].clone() };
         self.warn(format!(
             "{name}: material '{}' has a base colour texture but the primitive no TEXCOORD_0; the factor alone is \
-             used",
+             used, not cut out",
             material.name
         ));
         self.mesh.materials.push(material);
@@ -360,7 +374,8 @@ impl Reader<'_> {
                 bail!("{}: NORMAL and POSITION have different counts", where_());
             }
             let material_index = material.index().unwrap_or(self.mesh.materials.len() - 1);
-            let textured = self.mesh.materials[material_index].kd_map.is_some();
+            let m = &self.mesh.materials[material_index];
+            let textured = m.kd_map.is_some() || m.cutout.is_some();
             let uvs: Option<Vec<Vec2>> = match textured {
                 true => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),
                 false => None,
@@ -421,7 +436,13 @@ impl Reader<'_> {
             // averaged over directions, is the light's.
             let area: f32 = triangles.iter().map(super::triangle_area).sum();
             let ke = power * 4.0 / area;
-            self.mesh.materials.push(Material { name: format!("light '{name}'"), kd: Vec3::ZERO, ke, kd_map: None });
+            self.mesh.materials.push(Material {
+                name: format!("light '{name}'"),
+                kd: Vec3::ZERO,
+                ke,
+                kd_map: None,
+                cutout: None,
+            });
             let material = self.mesh.materials.len() - 1;
             self.mesh.groups.push(ObjGroup {
                 name: format!("light '{name}'"),

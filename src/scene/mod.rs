@@ -113,10 +113,11 @@ pub struct Mesh {
     /// Indexed by `SurfaceId - 1`.
     pub surfaces: Vec<Surface>,
     pub materials: Vec<Material>,
-    /// The colour textures the materials name (`Material::kd_map`).
-    pub textures: Vec<Texture>,
-    /// Each surface's mean albedo ([`Mesh::surface_albedo`]), indexed by `SurfaceId - 1`.
-    pub albedo: Vec<Vec3>,
+    /// The textures the materials name (`Material::kd_map`, `Cutout::map`); shared with the BVH.
+    pub textures: std::sync::Arc<Vec<Texture>>,
+    /// Each surface's mean colour of its texture (1 without one), which its `Kd` multiplies
+    /// ([`Mesh::surface_albedo`]); indexed by `SurfaceId - 1`.
+    pub texture_mean: Vec<Vec3>,
     pub bounds: Aabb,
 }
 
@@ -161,8 +162,10 @@ impl Mesh {
             bounds.min,
             bounds.max
         );
-        let mut mesh = Self { triangles, shading, uvs, surfaces, materials, textures, albedo: Vec::new(), bounds };
-        mesh.albedo = mesh.mean_albedos();
+        let textures = std::sync::Arc::new(textures);
+        let mut mesh =
+            Self { triangles, shading, uvs, surfaces, materials, textures, texture_mean: Vec::new(), bounds };
+        mesh.texture_mean = mesh.texture_means();
         Ok(mesh)
     }
 
@@ -180,17 +183,22 @@ impl Mesh {
         }
     }
 
+    /// Whether a material has a cut-out (`Material::cutout`) that the mesh's texture coordinates place.
+    pub fn has_cutouts(&self) -> bool {
+        !self.uvs.is_empty() && self.materials.iter().any(|m| m.cutout.is_some())
+    }
+
     /// The mean albedo over surface `surface`: what the sensor maps and the radiance cache see of it
     /// (docs/DESIGN.md §1): `Kd` where it has no texture.
     pub fn surface_albedo(&self, surface: SurfaceId) -> Vec3 {
-        self.albedo[surface as usize - 1]
+        self.material_of(surface).kd * self.texture_mean[surface as usize - 1]
     }
 
-    /// [`Mesh::surface_albedo`] of every surface: each textured triangle's mean, weighted by area. A
+    /// [`Mesh::texture_mean`] of every surface: each textured triangle's mean, weighted by area. A
     /// triangle's mean is that of 16 points spread evenly over it (the centroids of its 4 × 4 subdivision),
     /// read at the level of detail where its texture footprint is about 16 texels, so that together they
     /// cover it.
-    fn mean_albedos(&self) -> Vec<Vec3> {
+    fn texture_means(&self) -> Vec<Vec3> {
         const N: usize = 4;
         let mut sums = vec![(Vec3::ZERO, 0.0f32); self.surfaces.len()];
         for (i, t) in self.triangles.iter().enumerate() {
@@ -220,13 +228,7 @@ impl Mesh {
             s.0 += mean / (N * N) as f32 * area;
             s.1 += area;
         }
-        (1..=self.surfaces.len() as SurfaceId)
-            .zip(sums)
-            .map(|(id, (sum, area))| {
-                let kd = self.material_of(id).kd;
-                if area > 0.0 { kd * sum / area } else { kd }
-            })
-            .collect()
+        sums.into_iter().map(|(sum, area)| if area > 0.0 { sum / area } else { Vec3::ONE }).collect()
     }
 
     /// Each corner's texture coordinates of every triangle, three per triangle in order: what the G-buffer

@@ -41,6 +41,22 @@ pub struct Material {
     pub ke: Vec3,
     /// The index of its colour texture in the mesh's textures (`map_Kd`, glTF `baseColorTexture`).
     pub kd_map: Option<usize>,
+    /// Where it is cut out (`map_d`, glTF `alphaMode` MASK): no light is sent or stopped there.
+    pub cutout: Option<Cutout>,
+}
+
+/// An alpha test: a point of the surface exists where its texture's alpha there (bilinear, full resolution)
+/// is at least `threshold` (glTF's cutoff divided by its base colour factor's alpha; MTL's `map_d` 0.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cutout {
+    /// The texture, in the mesh's textures, whose alpha is tested.
+    pub map: usize,
+    pub threshold: f32,
+}
+
+impl Cutout {
+    /// MTL's `map_d`: cut out where the mask is under a half.
+    pub const MTL_THRESHOLD: f32 = 0.5;
 }
 
 /// The largest `Kd`/`Ke` component accepted: its square must stay finite in `f32` (the reference's variance),
@@ -151,9 +167,18 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let mut materials = Vec::with_capacity(tobj_materials.len() + 1);
     for m in &tobj_materials {
         let kd_map = match &m.diffuse_texture {
-            Some(file) => textures.find(&m.name, file, &mtl_dirs, &mut warnings)?,
+            Some(file) => textures.find(&m.name, file, TextureUse::Colour, &mtl_dirs, &mut warnings)?,
             None => None,
         };
+        let mut cutout = match &m.dissolve_texture {
+            Some(file) => textures.find(&m.name, file, TextureUse::Mask, &mtl_dirs, &mut warnings)?,
+            None => None,
+        }
+        .map(|map| Cutout { map, threshold: Cutout::MTL_THRESHOLD });
+        if cutout.is_some() && m.emissive.is_some_and(|ke| ke.iter().any(|&c| c > 0.0)) {
+            warnings.push(format!("material '{}': an emitter is not cut out: its map_d is ignored", m.name));
+            cutout = None;
+        }
         // MTL multiplies `map_Kd` by `Kd`; without a `Kd`, the texture alone.
         let unstated = if kd_map.is_some() { 1.0 } else { Material::DEFAULT_KD };
         materials.push(Material {
@@ -161,6 +186,7 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             kd: m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(unstated)),
             ke: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
             kd_map,
+            cutout,
         });
     }
     let defined: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
@@ -179,6 +205,7 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
         kd: Vec3::splat(Material::DEFAULT_KD),
         ke: Vec3::ZERO,
         kd_map: None,
+        cutout: None,
     });
 
     for name in checked.with_normals.intersection(&checked.without_normals) {
@@ -216,32 +243,37 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             false => Vec::new(),
         };
         let mut material = m.material_id.unwrap_or(default_material);
-        if uvs.is_empty() && materials[material].kd_map.is_some() {
+        let mapped = materials[material].kd_map.is_some() || materials[material].cutout.is_some();
+        if uvs.is_empty() && mapped {
             warnings.push(format!(
                 "{}: group '{}': material '{}' has a texture, but {} faces give texture coordinates ('vt'); \
-                     using its Kd alone",
+                 using its Kd alone, not cut out",
                 path.display(),
                 model.name,
                 materials[material].name,
                 if checked.with_uvs.contains(&model.name) { "not all its" } else { "none of its" }
             ));
             // The material's copy without its texture, for this group alone.
-            materials.push(Material { kd_map: None, ..materials[material].clone() });
+            materials.push(Material { kd_map: None, cutout: None, ..materials[material].clone() });
             material = materials.len() - 1;
         }
         groups.push(ObjGroup { name: model.name, material, triangles, normals, uvs });
     }
     let mut files = files.into_inner();
-    files.extend(textures.by_path.into_iter().filter(|(_, t)| t.is_some()).map(|(path, _)| path));
+    let mut images: Vec<PathBuf> =
+        textures.by_path.into_iter().filter(|(_, t)| t.is_some()).map(|((path, _), _)| path).collect();
+    images.sort();
+    images.dedup();
+    files.extend(images);
     Ok(ObjData { groups, materials, textures: textures.loaded, warnings, files })
 }
 
-/// The textures of a material library, each file read once.
+/// The textures of a material library, each file read once for each use.
 #[derive(Default)]
 struct TextureFiles {
     loaded: Vec<Texture>,
     /// Index in `loaded` of each file read, `None` where it could not be.
-    by_path: std::collections::HashMap<PathBuf, Option<usize>>,
+    by_path: std::collections::HashMap<(PathBuf, TextureUse), Option<usize>>,
 }
 
 impl TextureFiles {
@@ -252,43 +284,75 @@ impl TextureFiles {
         &mut self,
         material: &str,
         file: &str,
+        usage: TextureUse,
         dirs: &[PathBuf],
         warnings: &mut Vec<String>,
     ) -> Result<Option<usize>, LoadError> {
+        let statement = match usage {
+            TextureUse::Colour => "map_Kd",
+            TextureUse::Mask => "map_d",
+        };
         // `map_Kd -o 1 1 1 wood.png`: options before the name; only the name is used.
         let name = Path::new(file.split_whitespace().last().unwrap_or(file));
         if file.trim_start().starts_with('-') {
-            warnings.push(format!("material '{material}': map_Kd options ignored in '{file}'"));
+            warnings.push(format!("material '{material}': {statement} options ignored in '{file}'"));
         }
         let candidates = dirs.iter().flat_map(|d| [Some(d.join(name)), name.file_name().map(|f| d.join(f))]);
         let Some(path) = candidates.flatten().find(|p| p.is_file()) else {
             let looked = dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ");
             warnings.push(format!(
-                "material '{material}': texture '{}' not found (looked in {looked}); using its Kd alone",
-                name.display()
+                "material '{material}': {statement} texture '{}' not found (looked in {looked}); {}",
+                name.display(),
+                usage.fallback()
             ));
             return Ok(None);
         };
-        if let Some(&index) = self.by_path.get(&path) {
+        let key = (path, usage);
+        if let Some(&index) = self.by_path.get(&key) {
             return Ok(index);
         }
-        let index = match std::fs::read(&path) {
+        let path = &key.0;
+        let index = match std::fs::read(path) {
             Ok(bytes) => {
-                let texture = Texture::decode(&bytes, &path.display().to_string())
-                    .map_err(|e| error(&path, None, format!("material '{material}': {e:#}")))?;
+                let name = path.display().to_string();
+                let decoded = match usage {
+                    TextureUse::Colour => Texture::decode(&bytes, &name),
+                    TextureUse::Mask => Texture::decode_mask(&bytes, &name),
+                };
+                let texture = decoded.map_err(|e| error(path, None, format!("material '{material}': {e:#}")))?;
                 self.loaded.push(texture);
                 Some(self.loaded.len() - 1)
             }
             Err(e) => {
                 warnings.push(format!(
-                    "material '{material}': cannot read texture {}: {e}; using its Kd alone",
-                    path.display()
+                    "material '{material}': cannot read {statement} texture {}: {e}; {}",
+                    path.display(),
+                    usage.fallback()
                 ));
                 None
             }
         };
-        self.by_path.insert(path, index);
+        self.by_path.insert(key, index);
         Ok(index)
+    }
+}
+
+/// What a material library's texture is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum TextureUse {
+    /// `map_Kd`: colour, multiplied by `Kd`.
+    Colour,
+    /// `map_d`: a cut-out mask (its alpha, or its red where it has none).
+    Mask,
+}
+
+impl TextureUse {
+    /// What the material does without it.
+    fn fallback(self) -> &'static str {
+        match self {
+            Self::Colour => "using its Kd alone",
+            Self::Mask => "not cut out",
+        }
     }
 }
 

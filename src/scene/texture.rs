@@ -50,6 +50,16 @@ impl Texture {
 
     /// Decodes an image held in memory; `name` says where it came from in errors.
     pub fn decode(bytes: &[u8], name: &str) -> Result<Self> {
+        Self::decode_as(bytes, name, false)
+    }
+
+    /// Decodes a cut-out mask: its alpha where the image has an alpha channel, else its first channel
+    /// taken as alpha (a grey mask, as MTL's `map_d` usually is).
+    pub fn decode_mask(bytes: &[u8], name: &str) -> Result<Self> {
+        Self::decode_as(bytes, name, true)
+    }
+
+    fn decode_as(bytes: &[u8], name: &str, mask: bool) -> Result<Self> {
         let unreadable = || format!("texture {name} is not a readable image");
         let mut reader =
             image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().with_context(unreadable)?;
@@ -62,8 +72,10 @@ impl Texture {
         if width == 0 || height == 0 {
             bail!("texture {name} is {width} × {height}: it has no texels");
         }
+        let from_red = mask && !image.color().has_alpha();
         let rgba = image.to_rgba8();
-        let texels = rgba.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
+        let texel = |[r, g, b, a]: [u8; 4]| u32::from_le_bytes([r, g, b, if from_red { r } else { a }]);
+        let texels = rgba.pixels().map(|p| texel(p.0)).collect();
         Ok(Self::from_level(name, Level { width, height, texels }))
     }
 

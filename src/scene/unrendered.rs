@@ -1,6 +1,6 @@
 //! What an MTL material states that this renderer does not render. Every material is drawn as a diffuse
-//! `Kd` (its colour texture `map_Kd` included) that emits `Ke` (docs/DESIGN.md §1); a mirror, glass or another
-//! texture map would otherwise render as plain
+//! `Kd` (its colour texture `map_Kd` included, cut out by `map_d`) that emits `Ke` (docs/DESIGN.md §1); a
+//! mirror, glass or another texture map would otherwise render as plain
 //! diffuse without a word. [`Unrendered`] collects, per material, the statements that would have changed its
 //! look, and says them once per material: `materials.mtl: material 'glass': Ni, Tf, illum 7 ignored
 //! (treated as diffuse)`.
@@ -16,11 +16,11 @@
 //!
 //! Said: `Ks` not zero (and then `Ns`), `illum` 3–10 (reflection, glass, refraction, shadow matte), `d`
 //! below 1 or `Tr` above 0 (transparency), `Ni` and `Tf` where the material transmits, PBR extensions not
-//! zero, and every other statement: texture maps but `map_Kd` (`map_*`, `bump`, `disp`, `decal`, `refl`, `norm`) and
+//! zero, and every other statement: texture maps but `map_Kd` and `map_d` (`map_*`, `bump`, `disp`, `decal`, `refl`, `norm`) and
 //! statements of no kind known here.
 
 /// Statements read by the renderer, or harmless whatever their value.
-const USED_OR_HARMLESS: &[&str] = &["newmtl", "Kd", "Ke", "Ka", "map_Kd"];
+const USED_OR_HARMLESS: &[&str] = &["newmtl", "Kd", "Ke", "Ka", "map_Kd", "map_d"];
 /// The PBR extension's scalars: harmless at zero.
 const PBR_SCALARS: &[&str] = &["Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor"];
 /// `illum` models that transmit light through the surface.

@@ -162,7 +162,7 @@ mod tests {
             surface: vec![1; 3],
         };
         let scale = scene.mesh.scale();
-        let bvh = Bvh::build(&scene.mesh.triangles);
+        let bvh = Bvh::of_mesh(&scene.mesh);
         let masks = hints(&bvh, &points, &g, frame::BIAS * scale, frame::NEAR * scale);
         let all = (1u64 << points.len()) - 1;
         assert_eq!(masks[0], all, "in the open, every point is seen");

@@ -114,7 +114,7 @@ mod tests {
     fn the_share_of_the_light_a_point_sees() {
         let scene = lightbox(ImageSize { width: 4, height: 4 });
         let lights = Lights::new(&scene.mesh);
-        let bvh = Bvh::build(&scene.mesh.triangles);
+        let bvh = Bvh::of_mesh(&scene.mesh);
         let scale = scene.mesh.scale();
         let offsets = (frame::BIAS * scale, frame::NEAR * scale);
         let points = ShadowPoints::new(&lights);

@@ -43,8 +43,8 @@ pub fn plane(y: f32, n: usize) -> Vec<[Vec3; 3]> {
 /// A sphere (surface 1), a finely tessellated floor (surface 2) and a finely tessellated emitter (surface 3).
 pub fn scene() -> Mesh {
     let materials = vec![
-        Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None },
-        Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::ONE, kd_map: None },
+        Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None, cutout: None },
+        Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::ONE, kd_map: None, cutout: None },
     ];
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down

@@ -49,7 +49,13 @@ impl Atlas {
             "an atlas of {layers} tiles of {}² does not fit a framebuffer",
             desc.rd
         );
-        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_ATLAS_VERT, 0), true)?;
+        let pipeline = SensorPipeline::new(
+            device,
+            scene,
+            &desc,
+            ([shaders::SENSOR_ATLAS_VERT, shaders::SENSOR_ATLAS_VERT_CUTOUTS], 0),
+            true,
+        )?;
         let capacity =
             (max_columns * max_rows / layers).min(desc.batch_limit(device, pipeline.draw_bytes(&desc))?).max(1);
         let tiles = capacity * layers;

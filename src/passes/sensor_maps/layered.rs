@@ -28,7 +28,13 @@ impl Layered {
         let layers = desc.layers();
         let by_layers = limits.max_framebuffer_layers.min(limits.max_image_array_layers) / layers;
         ensure!(by_layers >= 1, "this device cannot render {layers} layers in one pass");
-        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_LAYERED_VERT, 0), true)?;
+        let pipeline = SensorPipeline::new(
+            device,
+            scene,
+            &desc,
+            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_CUTOUTS], 0),
+            true,
+        )?;
         let capacity = by_layers.min(desc.batch_limit(device, pipeline.draw_bytes(&desc))?);
         Ok(Self { pipeline, desc, capacity })
     }

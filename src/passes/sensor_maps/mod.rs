@@ -270,14 +270,19 @@ impl SlotMaps {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 5)])?;
+        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 8)])?;
         let set = pool.allocate(&pipeline.layout)?;
+        // Texture coordinates of the vertices drawn: the clusters' where the maps are drawn from them.
+        let uvs = pipeline.culled.as_ref().map_or(&pipeline.uvs, |c| &c.uvs);
         SetWriter::new(set)
             .storage_buffer(0, &views)
             .storage_buffer(1, &pipeline.surfaces)
             .storage_buffer(2, &pipeline.cache[0])
             .storage_buffer(3, &pipeline.cache[1])
             .storage_buffer(4, &pipeline.cache[2])
+            .storage_buffer(5, uvs)
+            .storage_buffer(6, &pipeline.textures[0])
+            .storage_buffer(7, &pipeline.textures[1])
             .apply(device);
         let draws = pipeline.culled.as_ref().map(|c| DrawLists::new(device, max_views as u32, c)).transpose()?;
         Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, draws, set, _pool: pool })
@@ -369,6 +374,8 @@ impl DrawLists {
 /// The cluster hierarchy a culled pipeline draws from.
 struct Culled {
     vertices: Arc<Buffer>,
+    /// Their texture coordinates, for cut-outs.
+    uvs: Arc<Buffer>,
     indices: Arc<Buffer>,
     max_per_view: u32,
     count_buffer: bool,
@@ -385,8 +392,12 @@ struct SensorPipeline {
     /// first).
     vertices: Arc<Buffer>,
     vertex_count: u32,
+    /// The soup's texture coordinates, for cut-outs.
+    uvs: Arc<Buffer>,
     surfaces: Arc<Buffer>,
     cache: [Arc<Buffer>; 3],
+    /// The texture table and texels, for cut-outs.
+    textures: [Arc<Buffer>; 2],
     /// The exact estimator: emitter fronts leave 0 and their group.
     exact: bool,
     /// The paper's estimator: maps hold `Ke` divided by this ([`emission_scale`]).
@@ -397,26 +408,31 @@ struct SensorPipeline {
 }
 
 impl SensorPipeline {
+    /// `vertex`: the strategy's vertex shader, and its `CUTOUTS` variant for a scene with cut-outs;
     /// `view_mask` 0 for ordinary passes. `cull`: draw from the scene's clusters where it has them.
     fn new(
         device: &Arc<Device>,
         scene: &GpuScene,
         desc: &StrategyDesc,
-        (vertex, view_mask): (&[u8], u32),
+        (vertex, view_mask): ([&[u8]; 2], u32),
         cull: bool,
     ) -> Result<Self> {
         let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let (vertex_stage, fragment_stage) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::FRAGMENT);
-        // Views and materials for the vertex shader, the radiance cache for the fragment shader.
+        // Views, materials and texture coordinates for the vertex shader, the radiance cache, materials and
+        // textures (cut-outs) for the fragment shader.
         let layout = PipelineLayout::new(
             device,
             &[
                 (0, storage, vertex_stage),
-                (1, storage, vertex_stage),
+                (1, storage, vertex_stage | fragment_stage),
                 (2, storage, fragment_stage),
                 (3, storage, fragment_stage),
                 (4, storage, fragment_stage),
+                (5, storage, vertex_stage),
+                (6, storage, fragment_stage),
+                (7, storage, fragment_stage),
             ],
             size_of::<SensorPush>() as u32,
             vertex_stage | fragment_stage,
@@ -425,8 +441,8 @@ impl SensorPipeline {
             device,
             &layout,
             &GraphicsDesc {
-                vertex,
-                fragment: shaders::SENSOR_FRAG,
+                vertex: vertex[scene.cutouts as usize],
+                fragment: if scene.cutouts { shaders::SENSOR_FRAG_CUTOUTS } else { shaders::SENSOR_FRAG },
                 render_pass: render_pass.raw,
                 color_attachments: 1,
                 vertex_stride: VERTEX_STRIDE,
@@ -442,10 +458,13 @@ impl SensorPipeline {
             vertex_count: scene.vertex_count,
             surfaces: scene.surfaces.clone(),
             cache: [scene.cache.table.clone(), scene.cache.values.clone(), scene.cache.splits.clone()],
+            textures: [scene.textures.clone(), scene.texels.clone()],
             exact: desc.exact(),
             emission_scale: emission_scale(scene, desc.fronts),
+            uvs: scene.uvs.clone(),
             culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
                 vertices: c.vertices.clone(),
+                uvs: c.uvs.clone(),
                 indices: c.indices.clone(),
                 max_per_view: c.max_per_view.max(1),
                 count_buffer: device.adapter.features.draw_indirect_count,

@@ -52,7 +52,13 @@ impl Multiview {
             (0..layers).map(|l| (0..view_layers.len()).filter(|&v| view_layers[v] == l).collect()).collect();
         let view_mask = if group_layers == 32 { u32::MAX } else { (1 << group_layers) - 1 };
         // Full detail: a multiview draw serves k views at once, so there is no one view's list to draw.
-        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_MULTIVIEW_VERT, view_mask), false)?;
+        let pipeline = SensorPipeline::new(
+            device,
+            scene,
+            &desc,
+            ([shaders::SENSOR_MULTIVIEW_VERT, shaders::SENSOR_MULTIVIEW_VERT_CUTOUTS], view_mask),
+            false,
+        )?;
         Ok(Self { pipeline, per_layer, desc, group_layers, group_sensors, groups })
     }
 

@@ -27,7 +27,13 @@ impl PerSensor {
         let limits = &device.adapter.limits;
         let layers = desc.layers();
         ensure!(limits.max_framebuffer_layers >= layers, "this device cannot render {layers} layers in one pass");
-        let pipeline = SensorPipeline::new(device, scene, &desc, (shaders::SENSOR_LAYERED_VERT, 0), true)?;
+        let pipeline = SensorPipeline::new(
+            device,
+            scene,
+            &desc,
+            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_CUTOUTS], 0),
+            true,
+        )?;
         let draw_bytes = pipeline.draw_bytes(&desc);
         let capacity = if one_submission {
             (limits.max_image_array_layers / layers).min(desc.batch_limit(device, draw_bytes)?)
