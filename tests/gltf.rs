@@ -101,7 +101,7 @@ fn a_position_naming_no_accessor_is_an_error_not_a_panic() {
 
 /// `KHR_lights_punctual`: a point light becomes a small emitting sphere whose irradiance on the floor is
 /// the light's, `I·cosθ/d²`, within 3 % (the lights' closed form on its facets); a spot light lights all
-/// around and a directional light is skipped, each said.
+/// around (said); the directional light is the sun, along its node's +z, its intensity the irradiance.
 #[test]
 fn a_point_light_lights_the_floor_as_its_intensity_says() {
     let dir = common::scratch("gltf-lights");
@@ -129,7 +129,9 @@ fn a_point_light_lights_the_floor_as_its_intensity_says() {
     let scene = Scene::from_mesh(&path, SIZE).unwrap();
     let said = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
     assert!(said("'spot'") && said("cone"), "{:?}", scene.warnings);
-    assert!(said("'sun'") && said("directional"), "{:?}", scene.warnings);
+    let sun = scene.sun.expect("the directional light is the sun");
+    assert!((sun.direction - Vec3::Z).length() < 1e-6 && sun.irradiance == Vec3::splat(3.0), "{sun:?}");
+    assert_eq!(scene.mesh.surfaces.last().unwrap().name, "sun/sun");
     let lights = sensorlight::light::groups::Lights::new(&scene.mesh);
     let bulb = scene.mesh.surfaces.iter().position(|s| s.name.contains("'bulb'")).unwrap() as u32 + 1;
     let group = lights.surface_group[&bulb] as usize;

@@ -3,11 +3,12 @@
 
 use anyhow::{Result, ensure};
 use clap::Args;
+use glam::Vec3;
 use sensorlight::params::{
     Bounces, DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG,
     DEFAULT_SENSOR, DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
 };
-use sensorlight::scene::{ImageSize, Scene};
+use sensorlight::scene::{ImageSize, Scene, Sun};
 
 /// What a sensor sees: shared by `render`, `reference` and `bench`.
 #[derive(Args, Clone, Debug, Default)]
@@ -88,6 +89,43 @@ pub fn sensor_size_help() -> String {
     format!("rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: {DEFAULT_SENSOR_SIZE}]")
 }
 
+/// The sun, on top of (or in place of) the scene's `[sun]`: shared by `render` and `reference`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct SunFlags {
+    /// Light the scene with a sun in this direction (x,y,z towards the sun; a 0.53° disc, `scene::sun`)
+    /// [default: the scene's [sun], if any]
+    #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub sun: Option<[f32; 3]>,
+    /// The sun's irradiance on a surface facing it, R,G,B (a white surface facing a sun of π has radiance 1)
+    /// [default: the scene's, else π]
+    #[arg(long, value_parser = parse_rgb, value_name = "R,G,B")]
+    pub sun_irradiance: Option<[f32; 3]>,
+    /// The sun's angular diameter in degrees [default: the scene's, else 0.53]
+    #[arg(long, value_name = "DEG")]
+    pub sun_diameter: Option<f32>,
+}
+
+impl SunFlags {
+    /// The sun these flags ask for over the scene's `current` one: `None` where they ask for nothing.
+    pub fn sun(&self, current: Option<&Sun>) -> Result<Option<Sun>> {
+        if self.sun.is_none() && self.sun_irradiance.is_none() && self.sun_diameter.is_none() {
+            return Ok(None);
+        }
+        let Some(direction) = self.sun.map(Vec3::from).or(current.map(|s| s.direction)) else {
+            anyhow::bail!("--sun-irradiance and --sun-diameter need a sun: give its direction with --sun X,Y,Z");
+        };
+        let irradiance = self.sun_irradiance.map(Vec3::from).or(current.map(|s| s.irradiance));
+        let diameter = self.sun_diameter.or(current.map(|s| s.angular_diameter_deg));
+        Sun::new(
+            direction,
+            diameter.unwrap_or(Sun::DEFAULT_DIAMETER_DEG),
+            irradiance.unwrap_or(Vec3::splat(Sun::DEFAULT_IRRADIANCE)),
+        )
+        .map(Some)
+        .map_err(|e| anyhow::anyhow!("--sun: {e}"))
+    }
+}
+
 /// Output size and preview: shared by `render` and `reference`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct ImageFlags {
@@ -152,6 +190,14 @@ impl ImageFlags {
         };
         ensure!(size.width >= 1 && size.height >= 1, "--width and --height must be at least 1");
         Ok(size)
+    }
+}
+
+fn parse_xyz(s: &str) -> Result<[f32; 3], String> {
+    let values: Result<Vec<f32>, _> = s.split(',').map(|p| p.trim().parse::<f32>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 => Ok([v[0], v[1], v[2]]),
+        _ => Err(format!("expected X,Y,Z, got '{s}'")),
     }
 }
 

@@ -24,6 +24,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::{Context as _, Result, bail, ensure};
+use args::SunFlags;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::gbuffer::GBufferData;
@@ -124,14 +125,23 @@ fn resolve(scene: Scene, flags: &Overrides) -> Result<(Scene, RenderParams)> {
 
 /// Loads what `path` holds: a scene file, or an OBJ mesh, given a camera that frames it, an image of
 /// `width` × `height` (each by default the automatic camera's), and, if nothing in it emits, a white sky
-/// (background 1,1,1: the image is then never black). Anything else is named and refused.
+/// (background 1,1,1: the image is then never black); lit by the sun `sun` asks for. Anything else is named
+/// and refused.
 fn load_input(
     path: &Path,
     flags: &Overrides,
     (width, height): (Option<u32>, Option<u32>),
+    sun: &SunFlags,
 ) -> Result<(Scene, RenderParams)> {
     match FileKind::of(path) {
-        FileKind::Scene => load_scene(path, flags),
+        FileKind::Scene => {
+            let mut scene = Scene::load(path)?;
+            if let Some(sun) = sun.sun(scene.sun.as_ref())? {
+                scene.set_sun(sun);
+            }
+            warn_all(&scene.warnings);
+            resolve(scene, flags)
+        }
         FileKind::ObjMesh | FileKind::GltfMesh => {
             let default = auto_camera::DEFAULT_IMAGE;
             let size = ImageSize {
@@ -140,6 +150,9 @@ fn load_input(
                 height: height.filter(|&h| h > 0).unwrap_or(default.height),
             };
             let mut scene = Scene::from_mesh(path, size)?;
+            if let Some(sun) = sun.sun(None)? {
+                scene.set_sun(sun);
+            }
             if !scene.mesh.emits_light() {
                 scene.warnings.retain(|w| w != Mesh::NO_EMITTER);
                 let white = toml::Value::Array(vec![toml::Value::Float(1.0); 3]);

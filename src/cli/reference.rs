@@ -10,7 +10,7 @@ use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
 
-use super::args::{BounceFlags, EstimatorFlags, ImageFlags};
+use super::args::{BounceFlags, EstimatorFlags, ImageFlags, SunFlags};
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -27,6 +27,8 @@ pub struct ReferenceArgs {
     bounces: BounceFlags,
     #[command(flatten)]
     image: ImageFlags,
+    #[command(flatten)]
+    sun: SunFlags,
     /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
     /// direction plus, if the scene has emitters, one point on an emitter, combined by multiple importance
     /// sampling (up to 2 rays). With global illumination (--bounces other than 0) the direction is a path:
@@ -47,7 +49,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         aa: args.image.aa,
         ..args.estimator.overrides()
     });
-    let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height))?;
+    let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height), &args.sun)?;
     outputs.check(&[], &scene.input_paths())?;
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;

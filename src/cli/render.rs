@@ -17,7 +17,9 @@ use sensorlight::renderer::{CacheConfig, DEFAULT_IN_FLIGHT, RenderOutput, Render
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event, StrategyRequest};
 
-use super::args::{BounceFlags, EstimatorFlags, ImageFlags, RefinementFlags, estimator_help, sensor_size_help};
+use super::args::{
+    BounceFlags, EstimatorFlags, ImageFlags, RefinementFlags, SunFlags, estimator_help, sensor_size_help,
+};
 use super::progress::{Preview, RenderProgress};
 use super::say;
 
@@ -36,6 +38,8 @@ pub struct RenderArgs {
     bounces: BounceFlags,
     #[command(flatten)]
     image: ImageFlags,
+    #[command(flatten)]
+    sun: SunFlags,
     #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
     estimator_kind: Option<EstimatorKind>,
     #[arg(long, help = sensor_size_help())]
@@ -128,7 +132,8 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         args.output.display()
     );
     outputs.check(&extra, &[&args.scene])?;
-    let (scene, params) = super::load_input(&args.scene, &args.overrides(), (args.image.width, args.image.height))?;
+    let size = (args.image.width, args.image.height);
+    let (scene, params) = super::load_input(&args.scene, &args.overrides(), size, &args.sun)?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }

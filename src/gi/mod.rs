@@ -78,10 +78,14 @@ pub struct RadianceCache {
 impl RadianceCache {
     /// The cache of `mesh` with `resolution` cells along its longest side; `lod`: triangles of coarser levels
     /// of detail the sensor maps may draw instead of the mesh's; `light`: where the direct light varies,
-    /// pieces are halved (see [`entries`]).
+    /// pieces are halved (see [`entries`]). Distant lights (the sun) have no entries: they reflect nothing,
+    /// and lie outside the grid.
     pub fn build(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], SurfaceId)], light: Option<LightVaries<'_>>) -> Self {
         let grid = Grid::new(mesh.bounds, resolution);
-        let pieces = entries::build(&grid, &mesh.triangles, lod, light);
+        let local = mesh.local_triangles();
+        let last_local = local.iter().map(|t| t.surface).max().unwrap_or(0);
+        let local_lod: Vec<([Vec3; 3], SurfaceId)> = lod.iter().filter(|(_, s)| *s <= last_local).copied().collect();
+        let pieces = entries::build(&grid, local, &local_lod, light);
         let albedo =
             pieces.entries.iter().map(|e| mesh.surface_albedo(e.surface).min(Vec3::splat(MAX_ALBEDO))).collect();
         let keys: Vec<([u32; 2], u32)> =

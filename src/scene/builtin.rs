@@ -38,6 +38,7 @@ pub fn from_groups(
         camera,
         image: size,
         render,
+        sun: None,
         warnings,
         notes: Vec::new(),
         inputs: Vec::new(),

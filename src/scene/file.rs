@@ -10,6 +10,10 @@
 //! [image]
 //! width = 256
 //! height = 256
+//! [sun]                         # optional: a distant disc lighting the scene (scene::sun)
+//! direction = [0.3, 1, 0.2]     # towards the sun
+//! irradiance = 3.14             # or [r, g, b]; on a surface facing it (default π)
+//! angular_diameter_deg = 0.53   # the default
 //! [render]                      # optional; every key is also a CLI flag, which wins
 //! sensor = "hemicube"           # or "frustum"
 //! ```
@@ -29,6 +33,7 @@ pub struct SceneFile {
     /// Optional where the mesh is a glTF file with a camera (its first is taken).
     pub camera: Option<CameraSection>,
     pub image: ImageSection,
+    pub sun: Option<SunSection>,
     /// Render parameters for this scene, uninterpreted here.
     #[serde(default)]
     pub render: toml::Table,
@@ -46,6 +51,31 @@ pub struct CameraSection {
 
 fn default_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunSection {
+    pub direction: [f32; 3],
+    pub irradiance: Option<Colour>,
+    pub angular_diameter_deg: Option<f32>,
+}
+
+/// A colour written as one number (grey) or three.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum Colour {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+impl Colour {
+    pub fn rgb(self) -> [f32; 3] {
+        match self {
+            Self::Grey(v) => [v; 3],
+            Self::Rgb(rgb) => rgb,
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]

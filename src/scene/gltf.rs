@@ -16,7 +16,8 @@
 //! - `KHR_lights_punctual`: a point or spot light becomes a small emitting sphere of 8 × 16 facets
 //!   ([`LIGHT_RADIUS`] of the scene's size) whose intensity is the light's (`Ke = 4·I / A`, `A` the facets'
 //!   area, a quarter of which is their mean projected area; colour × intensity read as radiometric, W/sr);
-//!   a spot's cone is not kept (said); a directional light is skipped (said) until the sun exists.
+//!   a spot's cone is not kept (said); the first directional light is the sun (`scene::sun`: a 0.53° disc
+//!   along the node's +z, colour × intensity its irradiance), any other is skipped (said).
 //!
 //! A file that requires an extension not listed in [`SUPPORTED`] is refused, naming it.
 
@@ -26,9 +27,9 @@ use anyhow::{Context as _, Result, bail, ensure};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
-use super::Camera;
 use super::obj::{Cutout, Material, ObjData, ObjGroup};
 use super::texture::Texture;
+use super::{Camera, Sun};
 
 /// Extensions a file may require.
 pub const SUPPORTED: &[&str] = &["KHR_materials_emissive_strength", "KHR_lights_punctual"];
@@ -44,6 +45,8 @@ const MAX_INSTANCES: usize = 1 << 20;
 pub struct GltfData {
     pub mesh: ObjData,
     pub camera: Option<Camera>,
+    /// The first directional light, as the sun.
+    pub sun: Option<Sun>,
 }
 
 /// Reads the glTF file at `path`.
@@ -132,6 +135,7 @@ fn read(path: &Path) -> Result<GltfData> {
         images: Vec::new(),
         untextured: Vec::new(),
         camera: None,
+        sun: None,
         lights: Vec::new(),
         instances: 0,
     };
@@ -142,9 +146,9 @@ fn read(path: &Path) -> Result<GltfData> {
         reader.node(&node, Mat4::IDENTITY, &mut Vec::new())?;
     }
     reader.punctual_lights();
-    let Reader { mut mesh, camera, .. } = reader;
+    let Reader { mut mesh, camera, sun, .. } = reader;
     mesh.files = dedup(files);
-    Ok(GltfData { mesh, camera })
+    Ok(GltfData { mesh, camera, sun })
 }
 
 fn dedup(mut files: Vec<PathBuf>) -> Vec<PathBuf> {
@@ -164,6 +168,7 @@ struct Reader<'a> {
     /// Each textured material's copy without its texture, made for a primitive without `TEXCOORD_0`.
     untextured: Vec<(usize, usize)>,
     camera: Option<Camera>,
+    sun: Option<Sun>,
     /// Point and spot lights met: position, colour × intensity, and the node's name.
     lights: Vec<(Vec3, Vec3, String)>,
     /// Node instances visited so far ([`MAX_INSTANCES`]).
@@ -318,8 +323,15 @@ impl Reader<'_> {
             let name = node.name().unwrap_or("unnamed").to_owned();
             let power = Vec3::from(light.color()) * light.intensity();
             match light.kind() {
+                gltf::khr_lights_punctual::Kind::Directional if self.sun.is_some() => {
+                    self.warn(format!("light '{name}': a second directional light; skipped (the first is the sun)"));
+                }
                 gltf::khr_lights_punctual::Kind::Directional => {
-                    self.warn(format!("light '{name}': a directional light is not supported yet; skipped"));
+                    // It shines along its node's −z: the sun lies along +z.
+                    let towards = world.transform_vector3(Vec3::Z);
+                    let sun = Sun::new(towards, Sun::DEFAULT_DIAMETER_DEG, power)
+                        .with_context(|| format!("{}: light '{name}'", self.path.display()))?;
+                    self.sun = Some(sun);
                 }
                 kind => {
                     if matches!(kind, gltf::khr_lights_punctual::Kind::Spot { .. }) {

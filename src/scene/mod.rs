@@ -10,6 +10,7 @@ pub mod gltf;
 pub mod kind;
 pub mod obj;
 pub mod ray;
+pub mod sun;
 pub mod surfaces;
 pub mod texture;
 mod unrendered;
@@ -23,6 +24,7 @@ pub use camera::Camera;
 pub use kind::FileKind;
 pub use obj::Material;
 pub use ray::Ray;
+pub use sun::Sun;
 pub use texture::Texture;
 
 /// Surface ids are 1-based; 0 marks "no surface" (the background) in the G-buffer.
@@ -183,6 +185,46 @@ impl Mesh {
         }
     }
 
+    /// Adds the sun's disc (`scene::sun`) after the mesh's own triangles, as one surface of its own
+    /// material; the bounds stay the scene's own.
+    pub fn add_sun(&mut self, sun: &Sun) {
+        let (facets, radiance) = sun.facets(&self.bounds);
+        let material = Material { name: "sun".into(), kd: Vec3::ZERO, ke: radiance, kd_map: None, cutout: None };
+        self.materials.push(material);
+        self.surfaces.push(Surface { name: "sun/sun".into(), material: self.materials.len() - 1 });
+        self.texture_mean.push(Vec3::ONE);
+        let surface = self.surfaces.len() as SurfaceId;
+        for v in facets {
+            let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            self.triangles.push(Triangle { v, normal, surface });
+            if !self.shading.is_empty() {
+                self.shading.push([normal; 3]);
+            }
+            if !self.uvs.is_empty() {
+                self.uvs.push([Vec2::ZERO; 3]);
+            }
+        }
+    }
+
+    /// Removes the sun [`Mesh::add_sun`] added: its triangles, surface and material, the last of each.
+    fn remove_sun(&mut self) {
+        let local = self.local_triangles().len();
+        self.triangles.truncate(local);
+        self.shading.truncate(if self.shading.is_empty() { 0 } else { local });
+        self.uvs.truncate(if self.uvs.is_empty() { 0 } else { local });
+        self.surfaces.pop();
+        self.texture_mean.pop();
+        self.materials.pop();
+    }
+
+    /// The mesh's own triangles: all but the distant lights' ([`Mesh::add_sun`]), which come after them
+    /// and lie outside its bounds (the radiance cache covers these only).
+    pub fn local_triangles(&self) -> &[Triangle] {
+        let inside = |t: &&Triangle| t.v.iter().all(|&p| self.bounds.contains(&Aabb { min: p, max: p }));
+        let local = self.triangles.iter().take_while(inside).count();
+        &self.triangles[..local]
+    }
+
     /// Whether a material has a cut-out (`Material::cutout`) that the mesh's texture coordinates place.
     pub fn has_cutouts(&self) -> bool {
         !self.uvs.is_empty() && self.materials.iter().any(|m| m.cutout.is_some())
@@ -313,6 +355,8 @@ pub struct Scene {
     pub image: ImageSize,
     /// The scene file's `[render]` table, uninterpreted (read by `params::Overrides::from_scene_table`).
     pub render: toml::Table,
+    /// The sun, whose disc is the mesh's last surface (`Mesh::add_sun`).
+    pub sun: Option<Sun>,
     /// Warnings met while loading (undefined materials, dropped triangles, no emitter, `Kd` above 1, …).
     pub warnings: Vec<String>,
     /// What a user should know that is not a problem (where the automatic camera was put, and why).
@@ -353,7 +397,7 @@ impl Scene {
             path.display()
         );
         let mesh_path = file.mesh_path(path);
-        let (obj, file_camera) = read_mesh(&mesh_path)?;
+        let (obj, file_camera, file_sun) = read_mesh(&mesh_path)?;
         // The scene file's camera, else the glTF's first.
         let Some(camera) = camera.or(file_camera) else {
             bail!(
@@ -363,9 +407,23 @@ impl Scene {
                 mesh_path.display()
             );
         };
+        let sun = match &file.sun {
+            Some(s) => Some(
+                Sun::new(
+                    s.direction.into(),
+                    s.angular_diameter_deg.unwrap_or(Sun::DEFAULT_DIAMETER_DEG),
+                    s.irradiance.map_or(Vec3::splat(Sun::DEFAULT_IRRADIANCE), |c| c.rgb().into()),
+                )
+                .with_context(|| format!("{}: [sun]", path.display()))?,
+            ),
+            None => file_sun,
+        };
         let mut warnings = obj.warnings;
-        let mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
+        let mut mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
             .with_context(|| mesh_path.display().to_string())?;
+        if let Some(sun) = &sun {
+            mesh.add_sun(sun);
+        }
         warnings.extend(mesh.lighting_warnings());
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
@@ -376,6 +434,7 @@ impl Scene {
             camera,
             image,
             render: file.render,
+            sun,
             warnings,
             notes: Vec::new(),
             inputs,
@@ -385,11 +444,11 @@ impl Scene {
 }
 
 /// The groups and materials of the mesh file at `path`, by its kind (glTF, else OBJ), and a glTF's first
-/// camera.
-fn read_mesh(path: &Path) -> Result<(obj::ObjData, Option<Camera>)> {
+/// camera and sun.
+fn read_mesh(path: &Path) -> Result<(obj::ObjData, Option<Camera>, Option<Sun>)> {
     match FileKind::of(path) {
-        FileKind::GltfMesh => gltf::load(path).map(|g| (g.mesh, g.camera)),
-        _ => Ok((obj::load(path)?, None)),
+        FileKind::GltfMesh => gltf::load(path).map(|g| (g.mesh, g.camera, g.sun)),
+        _ => Ok((obj::load(path)?, None, None)),
     }
 }
 
@@ -436,15 +495,19 @@ impl Scene {
     /// ([`auto_camera`]); the image is `image`, and the `[render]` table is empty (the defaults).
     pub fn from_mesh(path: &Path, image: ImageSize) -> Result<Self> {
         ensure!(image.width >= 1 && image.height >= 1, "image width and height must be at least 1");
-        let (obj, file_camera) = read_mesh(path)?;
+        let (obj, file_camera, sun) = read_mesh(path)?;
         let mut warnings = obj.warnings;
-        let mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
+        let mut mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
             .with_context(|| path.display().to_string())?;
-        warnings.extend(mesh.lighting_warnings());
+        // The camera frames the mesh itself, before the sun's far disc joins it.
         let (camera, placement) = match file_camera {
             Some(camera) => (camera, auto_camera::Placement::Outside),
             None => auto_camera::for_mesh(&mesh, image).with_context(|| format!("{}: camera", path.display()))?,
         };
+        if let Some(sun) = &sun {
+            mesh.add_sun(sun);
+        }
+        warnings.extend(mesh.lighting_warnings());
         let mut notes = Vec::new();
         if placement == auto_camera::Placement::Inside {
             let f = camera.forward;
@@ -460,7 +523,18 @@ impl Scene {
         }
         let render = toml::Table::new();
         let mesh_file = Some(path.to_owned());
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render, warnings, notes, inputs: obj.files, mesh_file })
+        let inputs = obj.files;
+        Ok(Self { path: path.to_owned(), mesh, camera, image, render, sun, warnings, notes, inputs, mesh_file })
+    }
+
+    /// Lights the scene with `sun`, in place of its own if it has one (warnings about the light said again).
+    pub fn set_sun(&mut self, sun: Sun) {
+        if self.sun.is_some() {
+            self.mesh.remove_sun();
+        }
+        self.mesh.add_sun(&sun);
+        self.sun = Some(sun);
+        self.warnings.retain(|w| w != Mesh::NO_EMITTER);
     }
 
     /// This scene as a TOML scene file to be written at `toml_path`: the mesh relative to that file's
@@ -499,6 +573,13 @@ impl Scene {
         doc.insert("mesh".into(), toml::Value::String(mesh.to_owned()));
         doc.insert("camera".into(), toml::Value::Table(camera));
         doc.insert("image".into(), toml::Value::Table(image));
+        if let Some(sun) = &self.sun {
+            let mut table = toml::Table::new();
+            table.insert("direction".into(), vec(sun.direction));
+            table.insert("irradiance".into(), vec(sun.irradiance));
+            table.insert("angular_diameter_deg".into(), num(sun.angular_diameter_deg));
+            doc.insert("sun".into(), toml::Value::Table(table));
+        }
         if !render.is_empty() {
             doc.insert("render".into(), toml::Value::Table(render.clone()));
         }

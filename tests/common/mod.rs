@@ -221,8 +221,13 @@ pub fn render(scene: &Scene, setup: &Setup, budget: Option<u64>) -> RenderOutput
 /// direct light alone) and `--aa on`, then `off`, each against the oracle integrated over each pixel's
 /// square (`samples` each): whole image and interior.
 pub fn against_the_area_oracle(scene: &Scene, epsilon: f32, samples: u32) -> [Comparison; 2] {
+    against_the_area_oracle_with(scene, Overrides { epsilon: Some(epsilon), ..Default::default() }, samples)
+}
+
+/// [`against_the_area_oracle`] with the parameters `flags` set (e.g. a background), `--aa` aside.
+pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u32) -> [Comparison; 2] {
     let params = |aa| {
-        let flags = Overrides { epsilon: Some(epsilon), aa: Some(aa), ..Default::default() };
+        let flags = Overrides { aa: Some(aa), ..flags.clone() };
         RenderParams::resolve(None, &flags).unwrap()
     };
     let p = params(Antialiasing::On);
