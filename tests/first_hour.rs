@@ -15,7 +15,7 @@ fn listing(dir: &Path) -> Vec<String> {
 }
 
 /// Waits up to `limit` for `done`, polling.
-fn wait_for(limit: Duration, done: impl Fn() -> bool) -> bool {
+fn wait_for(limit: Duration, mut done: impl FnMut() -> bool) -> bool {
     let start = Instant::now();
     while start.elapsed() < limit {
         if done() {
@@ -38,15 +38,19 @@ fn a_signal_stops_a_render_and_leaves_no_file() {
         std::fs::write(dir.join("out.png"), b"an earlier PNG").unwrap();
         let before = listing(&dir);
         // Direct light only: the first round's preview comes at once, the render takes some 30 s after it.
-        let child = common::command()
+        let mut child = common::command()
             .args(["render", "scenes/room/room.toml", "-o", out.to_str().unwrap()])
             .args(["--width", "128", "--height", "128", "--bounces", "0", "--preview-every", "1"])
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
         let preview = dir.join("out.preview.png");
-        let started = wait_for(Duration::from_secs(120), || preview.exists());
-        assert!(started, "{signal}: no preview appeared");
+        let started = wait_for(Duration::from_secs(120), || preview.exists() || child.try_wait().unwrap().is_some());
+        if !preview.exists() {
+            let run = child.wait_with_output().unwrap();
+            panic!("{signal}: no preview appeared ({}): {}", run.status, common::stderr(&run));
+        }
+        assert!(started);
         let sent = std::process::Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status();
         assert!(sent.unwrap().success(), "{signal}: kill failed");
         let sent_at = Instant::now();

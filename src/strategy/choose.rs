@@ -86,7 +86,9 @@ pub fn choose(
     }
 
     let choice_key = format!("{device} | {sensor} | {estimator} | rd {rd} | budget {budget}");
-    if let Some(strategy) = cache.choice(&choice_key) {
+    // A choice made for a scene whose sensors had fewer layers (fewer light groups) may not run on this
+    // one's (multiview's view count): then it is measured again.
+    if let Some(strategy) = cache.choice(&choice_key).filter(|&s| prober.unsupported(s, rd).is_none()) {
         return Ok(Choice { strategy, reason: "auto: fastest correct strategy here, cached".into() });
     }
     let mut candidates = Vec::new();
@@ -243,5 +245,20 @@ mod tests {
             let named = choose_with(&mut fake, StrategyRequest::Fixed(kind), &mut cache, &mut |_| ());
             assert_eq!(named.unwrap().strategy, kind);
         }
+    }
+
+    /// A cached choice that cannot run here (multiview chosen for sensors of few layers, met by sensors of
+    /// more than its view count) is measured again, not used.
+    #[test]
+    fn a_cached_choice_that_cannot_run_is_chosen_again() {
+        let mut fake =
+            Fake { error: |_| 0.0, time: |k| if k == StrategyKind::Layered { 1 } else { 10 }, probes: Vec::new() };
+        let mut cache = Cache::in_memory();
+        let key =
+            format!("fake device | {} | {} | rd 64 | budget {}", SensorKind::Hemicube, EstimatorKind::Exact, 1 << 20);
+        cache.record_choice(key, StrategyKind::Multiview);
+        let choice = choose_with(&mut fake, StrategyRequest::Auto, &mut cache, &mut |_| ()).unwrap();
+        assert_eq!(choice.strategy, StrategyKind::Layered);
+        assert!(!fake.probes.is_empty(), "measured again");
     }
 }
