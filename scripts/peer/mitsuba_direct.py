@@ -34,7 +34,8 @@ How each convention is matched
 * Geometry: the OBJ is parsed here (not by Mitsuba's OBJ loader, to control winding and grouping):
   `v` (first three values), `f` with `v`, `v/vt`, `v//vn`, `v/vt/vn` and negative (relative) indices,
   polygons fan-triangulated from their first vertex (as `tobj`, sensorlight's loader, does); texture
-  coordinates are ignored, zero-area triangles dropped. One Mitsuba mesh per material, its front the
+  coordinates `vt` (u, v) become (u, 1 − v), the image's row 0 at the top, as sensorlight and Mitsuba read
+  them; zero-area triangles dropped. One Mitsuba mesh per material, its front the
   counter-clockwise one, as in sensorlight. Shading normals as sensorlight's: a face's `vn`, normalised
   and turned to its front's side, are the mesh's vertex normals (the mesh is a triangle soup, so a corner
   is a vertex); a face without them takes its flat geometric normal normalize((v1 − v0) × (v2 − v0)) at
@@ -46,6 +47,15 @@ How each convention is matched
   sensorlight's default) and `Ke` the emitted radiance (0 when absent). Every surface gets a `twosided`
   `diffuse` BSDF of reflectance Kd (other surfaces reflect on both sides); emitters keep that BSDF too,
   so their own reflected light adds to Le, as sensorlight's Le + Kd·R does.
+* Textures: `map_Kd` (beside its MTL) is read as sRGB, turned linear, multiplied by Kd and given to the
+  `diffuse` BSDF as a `raw` bilinear `bitmap` that repeats: Mitsuba point-samples it at each sample, as
+  sensorlight's oracle does at level 0 (the box filter then averages it over the pixel). `map_d`
+  (cut-outs) is refused: Mitsuba's `direct` and `path` integrators test shadow rays against every
+  surface, a `mask` BSDF's holes included (tried: the light through a card's holes never reaches the
+  floor), so there is no peer for a cut-out's shadow here.
+* Sun and sky: a scene's `[sun]` becomes the same disc sensorlight draws (`src/scene/sun.rs`: a 32-gon of
+  the round disc's area, 10⁴ diagonals of the mesh's bounds away, radiance E / (A / (D² + A/π))), an
+  `area` emitter; `[render] background` a `constant` emitter.
 * Emitters: a material with any Ke component > 0 gets an `area` emitter of radiance Ke (linear RGB).
   Mitsuba's area emitter is one-sided: it emits only towards the side its geometric normal points to,
   i.e. the counter-clockwise front, sensorlight's convention.
@@ -56,8 +66,6 @@ How each convention is matched
   ratio the image plane spans the same ±tan(vfov/2)·aspect horizontally. Mitsuba's look_at orients the
   image like sensorlight (right = forward × up, row 0 at the top). Near and far clip planes are set from
   the scene's bounding box so nothing in the scene is clipped.
-* Background: black (no environment emitter); a scene's `[render] background` is refused unless it is
-  zero, since the scenes used for comparison are closed rooms.
 * Film: `hdrfilm`, RGB, float32, written as a linear OpenEXR with channels R, G, B (what
   `sensorlight compare` reads). `--pixel-sampling box` (the default) renders with the `box`
   reconstruction filter (radius ½ pixel): each pixel is the plain average of samples spread uniformly
@@ -112,8 +120,17 @@ class SceneError(Exception):
 @dataclass
 class Material:
     name: str
-    kd: tuple[float, float, float] = (DEFAULT_KD, DEFAULT_KD, DEFAULT_KD)
+    kd: tuple[float, float, float] | None = None
     ke: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    kd_map: Path | None = None
+    d_map: Path | None = None
+
+    @property
+    def albedo(self) -> tuple[float, float, float]:
+        """Kd: as given; without one, 1 under a texture and 0.8 grey otherwise (sensorlight's)."""
+        if self.kd is not None:
+            return self.kd
+        return (1.0, 1.0, 1.0) if self.kd_map is not None else (DEFAULT_KD,) * 3
 
     @property
     def is_emitter(self) -> bool:
@@ -128,6 +145,8 @@ class Mesh:
     triangles: dict[str | None, list[tuple[tuple[float, ...], ...]]] = field(default_factory=dict)
     # Per triangle of `triangles`, its corners' shading normals, or None where the face gives none.
     normals: dict[str | None, list[tuple[tuple[float, ...], ...] | None]] = field(default_factory=dict)
+    # Per triangle, its corners' texture coordinates (image rows down), or None where the face gives none.
+    uvs: dict[str | None, list[tuple[tuple[float, float], ...] | None]] = field(default_factory=dict)
     dropped_degenerate: int = 0
     warnings: list[str] = field(default_factory=list)
 
@@ -165,6 +184,10 @@ def load_mtl(path: Path, materials: dict[str, Material]) -> None:
                 current.kd = tuple(values)
             else:
                 current.ke = tuple(values)
+        elif key in ("map_Kd", "map_d") and current is not None and args:
+            image = path.parent / args[-1]  # options before the name are not read (as sensorlight)
+            if image.is_file():
+                setattr(current, "kd_map" if key == "map_Kd" else "d_map", image)
 
 
 def find_mtl(obj_dir: Path, name: str, mesh: Mesh) -> Path | None:
@@ -201,6 +224,14 @@ def normal_index(token: str, count: int, where: str) -> int | None:
     return face_index(parts[2], count, where)
 
 
+def texcoord_index(token: str, count: int, where: str) -> int | None:
+    """0-based texture coordinate index of one `f` token (`v/vt`, `v/vt/vn`), or None where it has none."""
+    parts = token.split("/")
+    if len(parts) < 2 or not parts[1]:
+        return None
+    return face_index(parts[1], count, where)
+
+
 def shading_normals(tri, given):
     """`given` corner normals normalised and turned to the front of `tri` (its flat normal where one is
     not a direction), as sensorlight's `surfaces::shading`."""
@@ -227,6 +258,7 @@ def load_obj(path: Path) -> Mesh:
     mesh = Mesh()
     vertices: list[tuple[float, float, float]] = []
     vertex_normals: list[tuple[float, float, float]] = []
+    texcoords: list[tuple[float, float]] = []
     material: str | None = None
     for where, key, args in statements(path):
         if key == "v":
@@ -239,13 +271,18 @@ def load_obj(path: Path) -> Mesh:
             if len(values) != 3:
                 raise SceneError(f"{where}: 'vn' takes 3 values")
             vertex_normals.append(tuple(values))
+        elif key == "vt":
+            values = parse_floats(args, where) + [0.0]
+            texcoords.append((values[0], 1.0 - values[1]))
         elif key == "f":
             if len(args) < 3:
                 raise SceneError(f"{where}: a face needs at least 3 vertices")
             idx = [face_index(a, len(vertices), where) for a in args]
             nidx = [normal_index(a, len(vertex_normals), where) for a in args]
+            tidx = [texcoord_index(a, len(texcoords), where) for a in args]
             tris = mesh.triangles.setdefault(material, [])
             normals = mesh.normals.setdefault(material, [])
+            uvs = mesh.uvs.setdefault(material, [])
             for k in range(1, len(idx) - 1):  # fan from the first vertex, as tobj triangulates
                 tri = (vertices[idx[0]], vertices[idx[k]], vertices[idx[k + 1]])
                 corners = (nidx[0], nidx[k], nidx[k + 1])
@@ -253,6 +290,8 @@ def load_obj(path: Path) -> Mesh:
                     tris.append(tri)
                     given = None if None in corners else tuple(vertex_normals[i] for i in corners)
                     normals.append(None if given is None else shading_normals(tri, given))
+                    at = (tidx[0], tidx[k], tidx[k + 1])
+                    uvs.append(None if None in at else tuple(texcoords[i] for i in at))
                 else:
                     mesh.dropped_degenerate += 1
         elif key == "usemtl":
@@ -296,6 +335,9 @@ class SceneSpec:
     vfov_deg: float
     width: int
     height: int
+    background: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # The [sun] table: direction, irradiance (RGB), angular diameter in degrees.
+    sun: tuple[list[float], list[float], float] | None = None
 
 
 def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
@@ -319,11 +361,51 @@ def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
         raise SceneError(f"{path}: [camera] vfov_deg must lie in (0, 180), got {vfov}")
     if w < 1 or h < 1:
         raise SceneError(f"{path}: image width and height must be at least 1")
-    background = doc.get("render", {}).get("background", [0, 0, 0])
-    if any(float(b) != 0 for b in background):
-        raise SceneError(f"{path}: [render] background {background} is not black; this peer renders none")
+    background = [float(b) for b in doc.get("render", {}).get("background", [0, 0, 0])]
+    sun = None
+    if "sun" in doc:
+        table = doc["sun"]
+        irradiance = table.get("irradiance", math.pi)
+        irradiance = [float(irradiance)] * 3 if isinstance(irradiance, (int, float)) else [float(x) for x in irradiance]
+        sun = ([float(x) for x in table["direction"]], irradiance, float(table.get("angular_diameter_deg", 0.53)))
     mesh = load_obj(path.parent / mesh_name)
-    return SceneSpec(path, mesh, eye, target, up, vfov, w, h)
+    return SceneSpec(path, mesh, eye, target, up, vfov, w, h, background, sun)
+
+
+def sun_disc(direction, irradiance, diameter_deg, lo, hi):
+    """The sun's facets and radiance, as `Sun::facets` (src/scene/sun.rs) builds them."""
+    import numpy as np
+
+    segments, distance_diagonals = 32, 1e4
+    d = np.asarray(direction, dtype=np.float64)
+    d /= np.linalg.norm(d)
+    distance = distance_diagonals * float(np.linalg.norm(hi - lo))
+    centre = (lo + hi) / 2 + d * distance
+    step = 2 * math.pi / segments
+    radius = distance * math.tan(math.radians(diameter_deg) / 2)
+    radius *= math.sqrt(math.pi / (0.5 * segments * math.sin(step)))
+    a = np.cross(d, [0.0, 0.0, 1.0] if abs(d[2]) < 0.9 else [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(d, a)
+    rim = [centre + (a * math.cos(k * step) + b * math.sin(k * step)) * radius for k in range(segments + 1)]
+    triangles = [(centre, rim[k + 1], rim[k]) for k in range(segments)]
+    # Counter-clockwise seen from the scene (the front faces it).
+    t = triangles[0]
+    if np.dot(np.cross(t[1] - t[0], t[2] - t[0]), d) > 0:
+        triangles = [(c, q, p) for c, p, q in triangles]
+    area = 0.5 * segments * radius * radius * math.sin(step)
+    projected = area / (distance * distance + area / math.pi)
+    return triangles, [e / projected for e in irradiance]
+
+
+def colour_texture(path: Path, kd):
+    """`path` (sRGB) as linear RGB times `kd`: a raw, repeating, bilinear Mitsuba bitmap texture."""
+    import mitsuba as mi
+    import numpy as np
+
+    bitmap = mi.Bitmap(str(path)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, srgb_gamma=False)
+    linear = np.array(bitmap, dtype=np.float32) * np.asarray(kd, dtype=np.float32)
+    return {"type": "bitmap", "bitmap": mi.Bitmap(linear), "raw": True, "filter_type": "bilinear", "wrap_mode": "repeat"}
 
 
 def choose_variant(requested: str | None, pixel_sampling: str) -> str:
@@ -363,18 +445,26 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
             continue
         material = spec.mesh.materials.get(name) if name is not None else None
         material = material or Material(name or "(default grey)")
-        if max(material.kd) > 1.0:
-            raise SceneError(f"material '{material.name}': Kd {material.kd} exceeds 1, which Mitsuba refuses")
+        kd = material.albedo
+        if max(kd) > 1.0:
+            raise SceneError(f"material '{material.name}': Kd {kd} exceeds 1, which Mitsuba refuses")
         positions = np.asarray(tris, dtype=np.float32).reshape(-1, 3)
         lo, hi = np.minimum(lo, positions.min(0)), np.maximum(hi, positions.max(0))
         faces = np.arange(len(positions), dtype=np.uint32)
         given = spec.mesh.normals.get(name, [])
         smooth = any(n is not None for n in given)
+        corner_uvs = spec.mesh.uvs.get(name, [])
+        textured = (material.kd_map or material.d_map) is not None and all(uv is not None for uv in corner_uvs)
         props = mi.Properties()
         props["face_normals"] = not smooth
-        props["bsdf"] = mi.load_dict(
-            {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(material.kd)}}}
-        )
+        reflectance = colour_texture(material.kd_map, kd) if textured and material.kd_map else {"type": "rgb", "value": list(kd)}
+        bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": reflectance}}
+        if material.d_map and not material.is_emitter:
+            raise SceneError(
+                f"material '{material.name}': map_d (a cut-out) — Mitsuba's direct and path integrators let no "
+                "shadow ray through a mask BSDF, so this peer cannot render its shadow"
+            )
+        props["bsdf"] = mi.load_dict(bsdf)
         if material.is_emitter:
             props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": list(material.ke)}})
         shape = mi.Mesh(
@@ -382,7 +472,7 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
             vertex_count=len(positions),
             face_count=len(tris),
             has_vertex_normals=smooth,
-            has_vertex_texcoords=False,
+            has_vertex_texcoords=textured,
             props=props,
         )
         params = mi.traverse(shape)
@@ -393,8 +483,26 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
             corners = [n if n is not None else (flat_normal(t),) * 3 for t, n in zip(tris, given)]
             normals = np.asarray(corners, dtype=np.float32).reshape(-1, 3)
             params["vertex_normals"] = type(params["vertex_normals"])(normals.ravel())
+        if textured:
+            texcoords = np.asarray(corner_uvs, dtype=np.float32).reshape(-1, 2)
+            params["vertex_texcoords"] = type(params["vertex_texcoords"])(texcoords.ravel())
         params.update()
         shapes[f"m{k}"] = shape
+    if spec.sun is not None:
+        facets, radiance = sun_disc(*spec.sun, lo, hi)
+        positions = np.asarray(facets, dtype=np.float32).reshape(-1, 3)
+        props = mi.Properties()
+        props["face_normals"] = True
+        props["bsdf"] = mi.load_dict({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}})
+        props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": radiance}})
+        shape = mi.Mesh("sun", vertex_count=len(positions), face_count=len(facets), props=props)
+        params = mi.traverse(shape)
+        params["vertex_positions"] = type(params["vertex_positions"])(positions.ravel())
+        params["faces"] = type(params["faces"])(np.arange(len(positions), dtype=np.uint32))
+        params.update()
+        shapes["sun"] = shape
+    if any(b > 0 for b in spec.background):
+        shapes["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": spec.background}}
     eye = np.asarray(spec.eye, dtype=np.float64)
     far = float(np.max(np.linalg.norm(np.stack([lo, hi]) - eye, axis=1)) * 4.0 + 1.0)
     diag = float(np.linalg.norm(hi - lo))
