@@ -281,14 +281,15 @@ impl<'a> RendererBuilder<'a> {
     pub fn build(self) -> Result<Renderer> {
         let Self { device, scene, config, cache, events } = self;
         check_size(device, &config)?;
-        let budget = config.batch_budget(device, &config.layout(&Lights::new(&scene.mesh)));
+        let layout = config.layout(&Lights::new(&scene.mesh));
+        let budget = config.batch_budget(device, &layout);
         let mut own_cache = Cache::in_memory();
         let cache = cache.unwrap_or(&mut own_cache);
         let mut ignore = |_| ();
         let events = events.unwrap_or(&mut ignore);
         let started = Instant::now();
         let choice = {
-            let mut prober = probe::ProbeRenderer::new(device, &config, budget);
+            let mut prober = probe::ProbeRenderer::new(device, &config, budget, layout.groups);
             let (sensor, rd) = (config.sensor, config.sensor_size);
             strategy::choose(&mut prober, sensor, config.estimator, rd, budget, config.strategy, cache, events)?
         };
@@ -326,7 +327,7 @@ pub fn self_check(
         cache: None,
     };
     let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
-    strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget), kind)
+    strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget, 0), kind)
 }
 
 /// Why strategy `kind` cannot run on `device` for `scene` with sensors of `sensor` kind and size `rd` read by

@@ -30,13 +30,17 @@ pub(crate) struct ProbeRenderer<'a> {
     config: RendererConfig,
     /// Bytes per batch when the probe does not ask for a batch size.
     budget: u64,
+    /// Light groups of the scene the strategy is chosen for: a strategy must run with its sensors too.
+    groups: u32,
     renderers: HashMap<(StrategyKind, u32, Option<u32>), Renderer>,
 }
 
 impl<'a> ProbeRenderer<'a> {
-    pub fn new(device: &'a Arc<Device>, config: &RendererConfig, budget: u64) -> Self {
+    /// The probe for choosing a strategy for a scene whose sensors measure `groups` light groups (0 for
+    /// the self-check alone).
+    pub fn new(device: &'a Arc<Device>, config: &RendererConfig, budget: u64, groups: u32) -> Self {
         let scene = builtin::lightbox(PROBE_SIZE);
-        Self { device, scene, config: *config, budget, renderers: HashMap::new() }
+        Self { device, scene, config: *config, budget, groups, renderers: HashMap::new() }
     }
 }
 
@@ -50,9 +54,10 @@ impl Prober for ProbeRenderer<'_> {
     }
 
     fn unsupported(&self, kind: StrategyKind, rd: u32) -> Option<String> {
-        // The probe's lightbox has one light: the layout the strategy meets there.
+        // The probe's lightbox has one light, the scene `groups`: the larger layout the strategy meets
+        // (multiview's view count may hold the probe's sensors and not the scene's).
         let groups = match self.config.estimator {
-            EstimatorKind::Exact => 1,
+            EstimatorKind::Exact => self.groups.max(1),
             EstimatorKind::Paper => 0,
         };
         let layout = SensorLayout { kind: self.config.sensor, groups };
