@@ -7,11 +7,13 @@
 // radiance cache at the point seen (cache.glsl): on an emitter's front divided by the maps' emission scale
 // as its Ke is, since the reduction multiplies those texels back.
 //
-// The CUTOUTS variant, for scenes with cut-outs, discards where a surface is cut out (a shader that may
-// discard keeps the depth test from running early, so other scenes do without it).
-// variant: CUTOUTS
+// The TEXTURES variant, for scenes with textures or cut-outs, reads a surface's texture at the mip level
+// the sensor texel covers (Kd·ε and the cache's light scaled from the surface's mean albedo to the texel's),
+// and discards where a surface is cut out (a shader that may discard keeps the depth test from running
+// early, so other scenes do without it).
+// variant: TEXTURES
 #include "cache.glsl"
-#ifdef CUTOUTS
+#ifdef TEXTURES
 layout(std430, set = 0, binding = 1) readonly buffer Surfaces { GpuSurface surfaces[]; };
 #define TEXTURE_BINDING 6
 #include "texture.glsl"
@@ -23,7 +25,7 @@ layout(location = 2) flat in float in_group;
 layout(location = 3) in vec3 in_world;
 layout(location = 4) flat in uint in_surface;
 layout(location = 5) flat in vec3 in_eye;
-#ifdef CUTOUTS
+#ifdef TEXTURES
 layout(location = 6) in vec2 in_uv;
 #endif
 layout(location = 0) out vec4 out_ck;
@@ -31,16 +33,29 @@ layout(location = 0) out vec4 out_ck;
 layout(push_constant) uniform Push { SensorPush push; };
 
 void main() {
-#ifdef CUTOUTS
-    // Cut out as the G-buffer and the ray cast cut (level 0): no light is sent or stopped there.
+    // What the surface reflects relative to its mean albedo (which Kd·ε and the cache's values carry).
+    vec3 scale = vec3(1.0);
+#ifdef TEXTURES
+    vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
     GpuSurface s = surfaces[in_surface];
+    // Cut out as the G-buffer and the ray cast cut (level 0): no light is sent or stopped there.
     if (s.alpha_map != 0u && sample_texture(s.alpha_map - 1u, in_uv, 0.0).a < s.alpha_threshold) {
         discard;
     }
+    if (s.kd_map != 0u) {
+        uint map = s.kd_map - 1u;
+        GpuTexture t = texture_table[map];
+        vec2 size = vec2(t.width, t.height);
+        float rho = max(length(dx * size), length(dy * size));
+        vec3 albedo = s.kd_factor.rgb * sample_texture(map, in_uv, rho > 0.0 ? log2(rho) : 0.0).rgb;
+        scale = mix(vec3(1.0), albedo / max(s.kd.rgb, vec3(1e-6)), greaterThan(s.kd.rgb, vec3(0.0)));
+    }
 #endif
-    out_ck = gl_FrontFacing ? vec4(in_ck_front, in_group) : vec4(in_ck_back, 0.0);
+    // An emitter's front as the vertex shader prepared it; any other side reflects, Kd·ε × scale.
+    bool emitter_front = gl_FrontFacing && in_group > 0.0;
+    out_ck = emitter_front ? vec4(in_ck_front, in_group) : vec4((gl_FrontFacing ? in_ck_front : in_ck_back) * scale, 0.0);
     if (push.cache != 0u) {
-        vec3 reflected = cached_radiance(in_world, in_eye, in_surface, gl_FrontFacing);
+        vec3 reflected = cached_radiance(in_world, in_eye, in_surface, gl_FrontFacing) * scale;
         out_ck.rgb += out_ck.a > 0.0 ? reflected / push.emission_scale : reflected;
     }
 }

@@ -7,7 +7,7 @@
 //   | t0 | t1 | t2 | t3 |   tile t = sensor * layers + layer, row-major, rd x rd texels each
 //   +----+----+----+----+
 //   | t4 | t5 | …  |    |
-// variant: CUTOUTS (sensor_common.glsl)
+// variant: TEXTURES (sensor_common.glsl)
 #include "sensor_common.glsl"
 
 out gl_PerVertex {

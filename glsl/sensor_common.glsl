@@ -16,9 +16,9 @@ layout(location = 1) in uint in_surface;
 
 layout(std430, set = 0, binding = 0) readonly buffer Views { GpuSensorView views[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Surfaces { GpuSurface surfaces[]; };
-#ifdef CUTOUTS
+#ifdef TEXTURES
 // Texture coordinates per vertex (of the soup, or of the clusters where drawn from them): read for a
-// surface with a cut-out only (elsewhere the buffer may hold a placeholder).
+// surface with a texture or a cut-out only (elsewhere the buffer may hold a placeholder).
 layout(std430, set = 0, binding = 5) readonly buffer Uvs { vec2 uvs[]; };
 #endif
 layout(push_constant) uniform Push { SensorPush push; };
@@ -29,8 +29,8 @@ layout(location = 2) flat out float out_group;  // light group + 1 of an emitter
 layout(location = 3) out vec3 out_world;        // where the texel sees the surface: the cache's key
 layout(location = 4) flat out uint out_surface;
 layout(location = 5) flat out vec3 out_eye;          // the view's origin
-#ifdef CUTOUTS
-layout(location = 6) out vec2 out_uv;  // where a cut-out is tested
+#ifdef TEXTURES
+layout(location = 6) out vec2 out_uv;  // where the texture and the cut-out are read
 #endif
 
 // Clip-space position of this vertex in `view`, its distances to the view's clip planes, and the triangle's
@@ -51,8 +51,8 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
     out_world = in_position;
     out_surface = in_surface;
     out_eye = view.eye.xyz;
-#ifdef CUTOUTS
-    out_uv = s.alpha_map != 0u ? uvs[gl_VertexIndex] : vec2(0.0);
+#ifdef TEXTURES
+    out_uv = (s.kd_map | s.alpha_map) != 0u ? uvs[gl_VertexIndex] : vec2(0.0);
 #endif
     return view.view_proj * p;
 }

@@ -2,7 +2,7 @@
 // Layered strategy: one instance per sensor view; the vertex shader routes the triangle to the view's
 // layer of the 2D-array framebuffer with gl_Layer (Vulkan 1.2 shaderOutputLayer).
 #extension GL_ARB_shader_viewport_layer_array : require
-// variant: CUTOUTS (sensor_common.glsl)
+// variant: TEXTURES (sensor_common.glsl)
 #include "sensor_common.glsl"
 
 out gl_PerVertex {

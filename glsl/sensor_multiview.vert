@@ -2,7 +2,7 @@
 // Multiview strategy (VK_KHR_multiview): the render pass's view mask runs this shader once per view;
 // gl_ViewIndex picks the sensor view, and view i always lands in layer i of the framebuffer's attachment.
 #extension GL_EXT_multiview : require
-// variant: CUTOUTS (sensor_common.glsl)
+// variant: TEXTURES (sensor_common.glsl)
 #include "sensor_common.glsl"
 
 out gl_PerVertex {

@@ -5,7 +5,7 @@
 
 // Indexed by surface id; entry 0 is "no surface".
 struct GpuSurface {
-    vec4 kd;         // albedo the sensors see (rgb): Kd times its texture's mean over the surface
+    vec4 kd;         // mean albedo (rgb): Kd times its texture's mean over the surface
     vec4 ke;         // emitted radiance Ke (rgb); w = light group + 1 for an emitter (front face only), else 0
     vec4 kd_factor;  // Kd itself (rgb): the G-buffer multiplies its texture by it
     uint kd_map;     // colour texture index + 1 (GpuTexture), 0 for none

@@ -30,8 +30,9 @@ pub struct GpuScene {
     /// The colour textures: a `GpuTexture` each, and every level's packed texels (`scene::texture`).
     pub textures: Arc<Buffer>,
     pub texels: Arc<Buffer>,
-    /// Whether a surface has a cut-out (the sensor maps then discard fragments: `sensor_cutout.frag`).
-    pub cutouts: bool,
+    /// Whether a surface has a texture or a cut-out: the sensor maps then read them (the `TEXTURES`
+    /// variants of their shaders).
+    pub textured: bool,
     /// `GpuSurface` per surface id (entry 0 unused).
     pub surfaces: Arc<Buffer>,
     /// The emitters, group by group (`GpuEmitter`); them in chunks of at most `EMITTER_CHUNK`
@@ -92,7 +93,7 @@ impl GpuCache {
 /// indices, and the clusters as the culling pass reads them.
 pub struct GpuClusters {
     pub vertices: Arc<Buffer>,
-    /// Their texture coordinates where the mesh has cut-outs (else a placeholder no shader reads).
+    /// Their texture coordinates where the mesh has textures or cut-outs (else a placeholder no shader reads).
     pub uvs: Arc<Buffer>,
     pub indices: Arc<Buffer>,
     /// `GpuCluster` each.
@@ -121,7 +122,7 @@ impl GpuClusters {
             .map(|(&position, &surface)| Vertex { position, surface })
             .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let uvs = if mesh.has_cutouts() { cluster_uvs(mesh, hierarchy) } else { vec![Vec2::ZERO] };
+        let uvs = if mesh.has_textures() { cluster_uvs(mesh, hierarchy) } else { vec![Vec2::ZERO] };
         Ok(Self {
             uvs: Arc::new(transfer::upload(device, "cluster texture coordinates", &uvs, storage)?),
             vertices: Arc::new(transfer::upload(
@@ -290,7 +291,7 @@ impl GpuScene {
             uvs: Arc::new(transfer::upload(device, "corner texture coordinates", &uvs, storage)?),
             textures: Arc::new(transfer::upload(device, "texture table", &textures, storage)?),
             texels: Arc::new(transfer::upload(device, "texels", &texels, storage)?),
-            cutouts: mesh.has_cutouts(),
+            textured: mesh.has_textures(),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
             chunk_count: chunks.len() as u32,

@@ -19,8 +19,8 @@ pub struct Vertex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSurface {
-    /// The albedo the sensor maps and the radiance cache see (rgb): `Kd` times its texture's mean over the
-    /// surface (`Mesh::surface_albedo`); w unused.
+    /// The surface's mean albedo (rgb): `Kd` times its texture's mean over the surface
+    /// (`Mesh::surface_albedo`), what `Kd·ε` and the radiance cache's values carry; w unused.
     pub kd: Vec4,
     /// Emitted radiance `Ke` (rgb); w = its light group + 1 for an emitter (one-sided: front face only), else
     /// 0.

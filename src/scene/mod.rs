@@ -225,13 +225,18 @@ impl Mesh {
         &self.triangles[..local]
     }
 
+    /// Whether a material has a colour texture or a cut-out that the mesh's texture coordinates place.
+    pub fn has_textures(&self) -> bool {
+        !self.uvs.is_empty() && self.materials.iter().any(|m| m.kd_map.is_some() || m.cutout.is_some())
+    }
+
     /// Whether a material has a cut-out (`Material::cutout`) that the mesh's texture coordinates place.
     pub fn has_cutouts(&self) -> bool {
         !self.uvs.is_empty() && self.materials.iter().any(|m| m.cutout.is_some())
     }
 
-    /// The mean albedo over surface `surface`: what the sensor maps and the radiance cache see of it
-    /// (docs/DESIGN.md §1): `Kd` where it has no texture.
+    /// The mean albedo over surface `surface`: what the radiance cache's pieces reflect onwards, and what
+    /// the sensor maps scale to the texel's (docs/DESIGN.md §1); `Kd` where it has no texture.
     pub fn surface_albedo(&self, surface: SurfaceId) -> Vec3 {
         self.material_of(surface).kd * self.texture_mean[surface as usize - 1]
     }

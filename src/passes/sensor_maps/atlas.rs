@@ -53,7 +53,7 @@ impl Atlas {
             device,
             scene,
             &desc,
-            ([shaders::SENSOR_ATLAS_VERT, shaders::SENSOR_ATLAS_VERT_CUTOUTS], 0),
+            ([shaders::SENSOR_ATLAS_VERT, shaders::SENSOR_ATLAS_VERT_TEXTURES], 0),
             true,
         )?;
         let capacity =

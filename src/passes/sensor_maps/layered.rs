@@ -32,7 +32,7 @@ impl Layered {
             device,
             scene,
             &desc,
-            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_CUTOUTS], 0),
+            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_TEXTURES], 0),
             true,
         )?;
         let capacity = by_layers.min(desc.batch_limit(device, pipeline.draw_bytes(&desc))?);

@@ -408,7 +408,7 @@ struct SensorPipeline {
 }
 
 impl SensorPipeline {
-    /// `vertex`: the strategy's vertex shader, and its `CUTOUTS` variant for a scene with cut-outs;
+    /// `vertex`: the strategy's vertex shader, and its `TEXTURES` variant for a scene with textures or cut-outs;
     /// `view_mask` 0 for ordinary passes. `cull`: draw from the scene's clusters where it has them.
     fn new(
         device: &Arc<Device>,
@@ -441,8 +441,8 @@ impl SensorPipeline {
             device,
             &layout,
             &GraphicsDesc {
-                vertex: vertex[scene.cutouts as usize],
-                fragment: if scene.cutouts { shaders::SENSOR_FRAG_CUTOUTS } else { shaders::SENSOR_FRAG },
+                vertex: vertex[scene.textured as usize],
+                fragment: if scene.textured { shaders::SENSOR_FRAG_TEXTURES } else { shaders::SENSOR_FRAG },
                 render_pass: render_pass.raw,
                 color_attachments: 1,
                 vertex_stride: VERTEX_STRIDE,

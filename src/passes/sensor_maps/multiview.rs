@@ -56,7 +56,7 @@ impl Multiview {
             device,
             scene,
             &desc,
-            ([shaders::SENSOR_MULTIVIEW_VERT, shaders::SENSOR_MULTIVIEW_VERT_CUTOUTS], view_mask),
+            ([shaders::SENSOR_MULTIVIEW_VERT, shaders::SENSOR_MULTIVIEW_VERT_TEXTURES], view_mask),
             false,
         )?;
         Ok(Self { pipeline, per_layer, desc, group_layers, group_sensors, groups })

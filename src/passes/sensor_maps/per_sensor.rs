@@ -31,7 +31,7 @@ impl PerSensor {
             device,
             scene,
             &desc,
-            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_CUTOUTS], 0),
+            ([shaders::SENSOR_LAYERED_VERT, shaders::SENSOR_LAYERED_VERT_TEXTURES], 0),
             true,
         )?;
         let draw_bytes = pipeline.draw_bytes(&desc);
