@@ -26,7 +26,7 @@ void main() {
     // Kd times its texture's mean over the pixel; untextured, Kd.
     vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
     // A cut-out is tested at the pixel centre (the ray cast's point): the pixel sees the surface or not.
-    if (s.alpha_map != 0u && sample_texture(s.alpha_map - 1u, in_uv, 0.0).a < s.alpha_threshold) {
+    if (cut_out(s, in_uv)) {
         discard;
     }
     vec3 albedo = s.kd_factor.rgb;

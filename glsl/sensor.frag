@@ -39,15 +39,12 @@ void main() {
     vec2 dx = dFdx(in_uv), dy = dFdy(in_uv);
     GpuSurface s = surfaces[in_surface];
     // Cut out as the G-buffer and the ray cast cut (level 0): no light is sent or stopped there.
-    if (s.alpha_map != 0u && sample_texture(s.alpha_map - 1u, in_uv, 0.0).a < s.alpha_threshold) {
+    if (cut_out(s, in_uv)) {
         discard;
     }
     if (s.kd_map != 0u) {
         uint map = s.kd_map - 1u;
-        GpuTexture t = texture_table[map];
-        vec2 size = vec2(t.width, t.height);
-        float rho = max(length(dx * size), length(dy * size));
-        vec3 albedo = s.kd_factor.rgb * sample_texture(map, in_uv, rho > 0.0 ? log2(rho) : 0.0).rgb;
+        vec3 albedo = s.kd_factor.rgb * sample_texture(map, in_uv, texture_lod(map, dx, dy)).rgb;
         scale = mix(vec3(1.0), albedo / max(s.kd.rgb, vec3(1e-6)), greaterThan(s.kd.rgb, vec3(0.0)));
     }
 #endif

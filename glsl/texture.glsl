@@ -56,6 +56,21 @@ vec4 sample_texture(uint index, vec2 uv, float lod) {
     return lod == lower ? a : mix(a, bilinear(t, uint(lower) + 1u, uv), lod - lower);
 }
 
+// The level of detail on which a step of `dx` or `dy` in uv spans one texel (Vulkan's scale factor ρ, the
+// larger axis, in texels of level 0): 0 where the texture is magnified.
+float texture_lod(uint index, vec2 dx, vec2 dy) {
+    GpuTexture t = texture_table[index];
+    vec2 size = vec2(t.width, t.height);
+    float rho = max(length(dx * size), length(dy * size));
+    return rho > 0.0 ? log2(rho) : 0.0;
+}
+
+// Whether surface `s` is cut out at `uv` (obj::Cutout; the CPU's twin is the BVH's `Cutouts::opaque`):
+// its cut-out texture's alpha, bilinear on level 0, under its threshold.
+bool cut_out(GpuSurface s, vec2 uv) {
+    return s.alpha_map != 0u && sample_texture(s.alpha_map - 1u, uv, 0.0).a < s.alpha_threshold;
+}
+
 // Sub-samples per side of a pixel's footprint.
 const uint FOOTPRINT_SIDE = 4u;
 
@@ -66,10 +81,7 @@ const uint FOOTPRINT_SIDE = 4u;
 // sample at its centre would be a point, up to twice off on a checker seen about one texel a pixel.
 // `dx`, `dy`: dFdx(uv), dFdy(uv), taken by the caller in uniform control flow.
 vec4 sample_footprint(uint index, vec2 uv, vec2 dx, vec2 dy) {
-    GpuTexture t = texture_table[index];
-    vec2 size = vec2(t.width, t.height);
-    float rho = max(length(dx * size), length(dy * size)) / float(FOOTPRINT_SIDE);
-    float lod = rho > 0.0 ? log2(rho) : 0.0;
+    float lod = texture_lod(index, dx / float(FOOTPRINT_SIDE), dy / float(FOOTPRINT_SIDE));
     vec4 sum = vec4(0.0);
     for (uint j = 0u; j < FOOTPRINT_SIDE; j++) {
         for (uint i = 0u; i < FOOTPRINT_SIDE; i++) {

@@ -41,12 +41,11 @@ struct Cutouts {
 }
 
 impl Cutouts {
-    /// Whether stored triangle `k` (corners `v`) exists at `p` (as `Mesh::opaque_at`).
+    /// Whether stored triangle `k` (corners `v`) exists at `p`: its cut-out's alpha there, bilinear at full
+    /// resolution, at least the threshold, as `glsl/gbuffer.frag` and `glsl/sensor.frag` test a fragment.
     fn opaque(&self, k: usize, v: &[Vec3; 3], p: Vec3) -> bool {
         let Some((uvs, cutout)) = &self.tests[k] else { return true };
-        let [b0, b1, b2] = super::barycentric(v, p);
-        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
-        self.textures[cutout.map].sample(uv, 0.0).w >= cutout.threshold
+        self.textures[cutout.map].sample(super::interpolate(v, uvs, p), 0.0).w >= cutout.threshold
     }
 }
 

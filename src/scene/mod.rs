@@ -177,8 +177,7 @@ impl Mesh {
         let material = self.material_of(self.triangles[triangle].surface);
         match (material.kd_map, self.uvs.get(triangle)) {
             (Some(map), Some(uvs)) => {
-                let [b0, b1, b2] = barycentric(&self.triangles[triangle].v, p);
-                let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
+                let uv = interpolate(&self.triangles[triangle].v, uvs, p);
                 material.kd * self.textures[map].sample(uv, 0.0).truncate()
             }
             _ => material.kd,
@@ -289,8 +288,7 @@ impl Mesh {
     pub fn shading_normal(&self, triangle: usize, p: Vec3) -> Vec3 {
         let t = &self.triangles[triangle];
         let Some(corners) = self.shading.get(triangle) else { return t.normal };
-        let [b0, b1, b2] = barycentric(&t.v, p);
-        (corners[0] * b0 + corners[1] * b1 + corners[2] * b2).try_normalize().unwrap_or(t.normal)
+        interpolate(&t.v, corners, p).try_normalize().unwrap_or(t.normal)
     }
 
     /// Each corner's shading normal of every triangle, three per triangle in order: what the G-buffer
@@ -455,6 +453,16 @@ fn read_mesh(path: &Path) -> Result<(obj::ObjData, Option<Camera>, Option<Sun>)>
         FileKind::GltfMesh => gltf::load(path).map(|g| (g.mesh, g.camera, g.sun)),
         _ => Ok((obj::load(path)?, None, None)),
     }
+}
+
+/// The corners' `values` of triangle `v` (shading normals, texture coordinates) interpolated at `p` by its
+/// [`barycentric`] coordinates.
+pub fn interpolate<T>(v: &[Vec3; 3], values: &[T; 3], p: Vec3) -> T
+where
+    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
+    let [b0, b1, b2] = barycentric(v, p);
+    values[0] * b0 + values[1] * b1 + values[2] * b2
 }
 
 /// The barycentric coordinates of `p` (on or near the triangle `v`'s plane), each clamped to the

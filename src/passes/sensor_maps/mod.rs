@@ -374,7 +374,7 @@ impl DrawLists {
 /// The cluster hierarchy a culled pipeline draws from.
 struct Culled {
     vertices: Arc<Buffer>,
-    /// Their texture coordinates, for cut-outs.
+    /// Their texture coordinates, for textures and cut-outs.
     uvs: Arc<Buffer>,
     indices: Arc<Buffer>,
     max_per_view: u32,
@@ -392,11 +392,11 @@ struct SensorPipeline {
     /// first).
     vertices: Arc<Buffer>,
     vertex_count: u32,
-    /// The soup's texture coordinates, for cut-outs.
+    /// The soup's texture coordinates, for textures and cut-outs.
     uvs: Arc<Buffer>,
     surfaces: Arc<Buffer>,
     cache: [Arc<Buffer>; 3],
-    /// The texture table and texels, for cut-outs.
+    /// The texture table and texels, for textures and cut-outs.
     textures: [Arc<Buffer>; 2],
     /// The exact estimator: emitter fronts leave 0 and their group.
     exact: bool,
@@ -421,7 +421,7 @@ impl SensorPipeline {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let (vertex_stage, fragment_stage) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::FRAGMENT);
         // Views, materials and texture coordinates for the vertex shader, the radiance cache, materials and
-        // textures (cut-outs) for the fragment shader.
+        // textures (the `TEXTURES` variant) for the fragment shader.
         let layout = PipelineLayout::new(
             device,
             &[
