@@ -2,7 +2,7 @@
 // Composition (docs/DESIGN.md §3 step 7): final = Le + albedo * R, where R is the filtered radiance map and,
 // where the indirect part is filtered apart (push.radius != 0), R = R_f - I_f + I_i (R and its indirect part
 // at R's filter radius, the indirect part at its own). R is written too: the radiance AOV. A pixel where no
-// surface is seen shows the background radiance, with alpha 0 (coverage: 1 on surfaces) so that the image
+// surface is seen shows the background radiance (or under a sky map its own, from the host), with alpha 0 (coverage: 1 on surfaces) so that the image
 // can still be composited over another background.
 #include "types.glsl"
 
@@ -16,6 +16,8 @@ layout(std430, set = 0, binding = 4) readonly buffer IndirectAtR { vec4 indirect
 layout(std430, set = 0, binding = 5) readonly buffer IndirectOwn { vec4 indirect_own[]; };
 layout(std430, set = 0, binding = 6) writeonly buffer Composed { vec4 composed[]; };
 layout(set = 0, binding = 7, r32ui) uniform readonly uimage2D surface_ids;
+// Under a sky map (push.sky): the sky each pixel shows where no surface is (src/scene/sky.rs SkyMap::pixels).
+layout(std430, set = 0, binding = 8) readonly buffer SkyPixels { vec4 sky_pixels[]; };
 layout(push_constant) uniform Push { ComposePush push; };
 
 void main() {
@@ -26,7 +28,7 @@ void main() {
     uint i = uint(p.y) * push.width + uint(p.x);
     if (imageLoad(surface_ids, p).r == NO_SURFACE) {
         composed[i] = vec4(0.0);
-        final_image[i] = vec4(push.background.rgb, 0.0);
+        final_image[i] = vec4(push.sky != 0u ? sky_pixels[i].rgb : push.background.rgb, 0.0);
         return;
     }
     vec3 le = imageLoad(emission, p).rgb;

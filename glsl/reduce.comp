@@ -16,6 +16,10 @@
 //                       1 and the quantisation of the sensor map cancels (the ratio estimator of Heitz,
 //                       Hill & McGuire 2018).
 //
+// A main-layer texel with alpha < 0 saw no geometry under a sky map (the maps were cleared so): its Ck is
+// the sky along the texel's direction (`directions`, in the sensor's frame, turned into the world by the
+// sensor's t, b, n), averaged over the texel's solid angle (glsl/sky.glsl).
+//
 // Layers of one sensor:  | main 0 .. main L-1 | g0 scene | g0 emitters | g1 scene | g1 emitters | ... |
 //
 // The 8 x 8 threads walk each layer in 8 x 8 blocks (no integer division in the loop: CPU drivers have no
@@ -24,6 +28,8 @@
 // runs a workgroup's invocations as coroutines that all switch at every barrier, and with 256 the barriers
 // cost more than the sums (docs/BENCHMARKS.md); a GPU still has hundreds of sensors' workgroups in flight.
 #include "types.glsl"
+#define SKY_BINDING 11
+#include "sky.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -37,6 +43,9 @@ layout(std430, set = 0, binding = 6) readonly buffer Zooms { GpuZoom zooms[]; };
 layout(std430, set = 0, binding = 7) readonly buffer Irradiance { vec4 irradiance[]; };  // [sensor][chunk]
 layout(std430, set = 0, binding = 8) readonly buffer Groups { GpuLightGroup groups[]; };
 layout(std430, set = 0, binding = 9) writeonly buffer Indirect { vec4 indirect[]; };  // the main layers' R
+// Per main texel ([layer][row][col]): its centre's direction in the sensor frame (t, b, n), and in w the
+// solid angle it covers (src/sensors/weights.rs texel_directions).
+layout(std430, set = 0, binding = 10) readonly buffer Directions { vec4 directions[]; };
 layout(push_constant) uniform Push { ReducePush push; };
 
 shared vec3 partial[64];
@@ -62,6 +71,7 @@ void main() {
     uint rd = push.rd;
 
     // The main layers: Ck (the rest, in the exact estimator) weighted by the precomputed texel weights.
+    GpuSensor frame = sensors[sensor];
     vec3 sum = vec3(0.0);
     for (uint layer = 0u; layer < push.main_layers; layer++) {
         ivec3 origin = map_origin(sensor, layer);
@@ -70,7 +80,12 @@ void main() {
             uint row = weight_base + y * rd;
             for (uint x = thread.x; x < rd; x += 8u) {
                 vec4 texel = imageLoad(sensor_maps, origin + ivec3(x, y, 0));
-                sum += texel.rgb * (texel.a > 0.0 ? push.emission_scale : 1.0) * weights[row + x];
+                vec3 ck = texel.rgb * (texel.a > 0.0 ? push.emission_scale : 1.0);
+                if (texel.a < 0.0) {
+                    vec4 d = directions[row + x];
+                    ck = sky_radiance(frame.t.xyz * d.x + frame.b.xyz * d.y + frame.n.xyz * d.z, d.w);
+                }
+                sum += ck * weights[row + x];
             }
         }
     }

@@ -1,6 +1,7 @@
 #version 460
 // The supersampling's resolve (docs/DESIGN.md §11): one invocation per supersampled pixel averages
-// Kd·R over its sub-pixel samples (the background where one leaves the scene), adds the light its square
+// Kd·R over its sub-pixel samples (the sky it sees where one leaves the scene, which the host put in its
+// albedo), adds the light its square
 // emits (exact, from the host) and writes that over
 // the composed image, its alpha the share of samples that met a surface. A sample's R is its donor's final
 // R (a neighbouring pixel on its surface); with the exact light, the light groups' light is recomputed at
@@ -49,7 +50,7 @@ void main() {
     for (uint k = 0u; k < push.samples; k++) {
         GpuSubSample s = samples[f * push.samples + k];
         if (s.position.w == 0.0) {
-            image += push.background.rgb;
+            image += s.albedo.rgb;
             continue;
         }
         vec3 rs = composed[s.donor].rgb;

@@ -1,7 +1,8 @@
 #version 460
 // Sensor maps: each texel stores Ck (paper §III-C) as the vertex shader prepared it for the side seen, and
 // in alpha the light group + 1 of an emitter's front (0 otherwise), from which the reduction measures each
-// group's visibility. The clear colour is the background radiance, for texels that see no geometry.
+// group's visibility. The clear colour is the background radiance, for texels that see no geometry (or
+// alpha -1 under a sky map, which the reduction looks up along the texel's direction).
 //
 // With global illumination (push.cache) every surface also returns the light it reflects, read from the
 // radiance cache at the point seen (cache.glsl): on an emitter's front divided by the maps' emission scale

@@ -149,11 +149,11 @@ struct ImagePush {
 
 // Composition (src/gpu_types.rs ComposePush): no-surface pixels show the background.
 struct ComposePush {
-    vec4 background;  // rgb: radiance of rays that leave the scene
+    vec4 background;  // rgb: radiance of rays that leave the scene (no sky map)
     uint width;
     uint height;
     uint apart;       // 1: the indirect part was filtered apart
-    uint _pad;
+    uint sky;         // 1: a pixel without a surface shows its own sky (sky_pixels)
 };
 
 // Surface id of pixels where no surface is seen (src/scene/mod.rs NO_SURFACE).
@@ -171,7 +171,7 @@ struct ExactInterpolatePush {
 struct GpuSubSample {
     vec4 position;  // w: 1 on a surface, 0 where the ray leaves the scene
     vec4 normal;
-    vec4 albedo;
+    vec4 albedo;    // where the ray leaves the scene: the sky it sees
     uint donor;     // the pixel whose final R the sample takes
     uint _pad[3];
     float visibility[MAX_GROUPS];        // at the sample (< 0: not measured)
@@ -187,7 +187,6 @@ struct GpuSupersampledPixel {
 
 // The supersampling's resolve (src/gpu_types.rs ResolvePush).
 struct ResolvePush {
-    vec4 background;
     uint width;
     uint count;    // supersampled pixels
     uint samples;  // sub-samples per pixel

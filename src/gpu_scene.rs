@@ -16,7 +16,7 @@ use crate::gpu_types::{
     GpuEmitterChunk, GpuLightGroup, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
-use crate::scene::{Mesh, Scene, Texture};
+use crate::scene::{Mesh, Scene, SkyMap, Texture};
 use crate::vk::{Buffer, Device, transfer};
 
 pub struct GpuScene {
@@ -30,6 +30,10 @@ pub struct GpuScene {
     /// The colour textures: a `GpuTexture` each, and every level's packed texels (`scene::texture`).
     pub textures: Arc<Buffer>,
     pub texels: Arc<Buffer>,
+    /// The sky map: its `GpuTexture` (levels 0: no map, and one texel no shader reads) and its levels'
+    /// linear texels (`vec4`, `scene::sky`).
+    pub sky: Arc<Buffer>,
+    pub sky_texels: Arc<Buffer>,
     /// Whether a surface has a texture or a cut-out: the sensor maps then read them (the `TEXTURES`
     /// variants of their shaders).
     pub textured: bool,
@@ -278,6 +282,7 @@ impl GpuScene {
         if textures.is_empty() {
             (texels, textures) = (vec![0], vec![GpuTexture::default()]);
         }
+        let (sky, sky_texels) = gpu_sky(scene.sky.as_deref());
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             vertex_count: vertices.len() as u32,
@@ -291,6 +296,8 @@ impl GpuScene {
             uvs: Arc::new(transfer::upload(device, "corner texture coordinates", &uvs, storage)?),
             textures: Arc::new(transfer::upload(device, "texture table", &textures, storage)?),
             texels: Arc::new(transfer::upload(device, "texels", &texels, storage)?),
+            sky: Arc::new(transfer::upload(device, "sky map table", &[sky], storage)?),
+            sky_texels: Arc::new(transfer::upload(device, "sky map texels", &sky_texels, storage)?),
             textured: mesh.has_textures(),
             surfaces: Arc::new(transfer::upload(device, "surfaces", &surfaces(mesh, &lights), storage)?),
             emitters: Arc::new(transfer::upload(device, "emitters", &emitters, storage)?),
@@ -345,6 +352,14 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<u32>, Vec<GpuTexture>) {
         })
         .collect();
     (texels, table)
+}
+
+/// The sky map's table entry and every level's texels, level 0 first (`scene::sky`); without a map, levels
+/// 0 and one black texel.
+pub fn gpu_sky(sky: Option<&SkyMap>) -> (GpuTexture, Vec<Vec4>) {
+    let Some(sky) = sky else { return (GpuTexture::default(), vec![Vec4::ZERO]) };
+    let texels = sky.levels.iter().flat_map(|l| l.texels.iter().map(|t| t.extend(0.0))).collect();
+    (GpuTexture { offset: 0, width: sky.width(), height: sky.height(), levels: sky.levels.len() as u32 }, texels)
 }
 
 #[cfg(test)]

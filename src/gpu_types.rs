@@ -276,6 +276,7 @@ pub struct GpuSubSample {
     pub position: [f32; 4],
     /// Unit normal turned towards the camera.
     pub normal: [f32; 4],
+    /// `Kd` at the sample; where it leaves the scene, the radiance it sees there (the sky along its ray).
     pub albedo: [f32; 4],
     /// The pixel whose final R the sample takes: the nearest on the same surface (`supersample::donor`).
     pub donor: u32,
@@ -300,8 +301,6 @@ pub struct GpuSupersampledPixel {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ResolvePush {
-    /// What a sample that leaves the scene sees (rgb).
-    pub background: [f32; 4],
     pub width: u32,
     /// Supersampled pixels.
     pub count: u32,
@@ -334,13 +333,15 @@ pub struct ImagePush {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ComposePush {
-    /// Radiance of rays that leave the scene (rgb; w unused).
+    /// Radiance of rays that leave the scene (rgb; w unused), where there is no sky map.
     pub background: [f32; 4],
     pub width: u32,
     pub height: u32,
     /// 1: R = R_f − I_f + I_i (the indirect part filtered apart); 0: R as it is.
     pub apart: u32,
-    pub _pad: u32,
+    /// 1: a pixel without a surface shows its own sky (the sky map over its square, from the host); 0: the
+    /// background.
+    pub sky: u32,
 }
 
 /// Values of `w` in the radiance map: how a pixel's R was obtained.

@@ -560,6 +560,36 @@ proptest! {
             .scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}")).check()?;
     }
 
+    /// A scene's `[sky]` map (a valid OpenEXR or Radiance HDR image) with bytes changed or cut short.
+    #[test]
+    fn mutated_sky_map(
+        format in prop_oneof![Just("exr"), Just("hdr")],
+        changes in proptest::collection::vec((0usize..100_000, any::<u8>()), 0..6),
+        cut in proptest::option::of(0.0f64..1.0),
+    ) {
+        let dir = scratch("sky");
+        let name = format!("sky.{format}");
+        let image = image::Rgb32FImage::from_fn(16, 8, |x, y| image::Rgb([x as f32 * 0.1, y as f32 * 0.2, 1.0]));
+        match format {
+            "exr" => {
+                let texels: Vec<glam::Vec4> = image.pixels().map(|p| glam::Vec4::new(p[0], p[1], p[2], 1.0)).collect();
+                sensorlight::output::exr::ExrImage::new(16, 8).rgb("", &texels).write(&dir.join(&name)).unwrap();
+            }
+            _ => image::DynamicImage::ImageRgb32F(image).save(dir.join(&name)).unwrap(),
+        }
+        let mut bytes = std::fs::read(dir.join(&name)).unwrap();
+        for (at, byte) in changes {
+            let n = bytes.len();
+            bytes[at % n] = byte;
+        }
+        if let Some(f) = cut {
+            bytes.truncate((bytes.len() as f64 * f) as usize);
+        }
+        Files::new(&dir).write(&name, &bytes).write("mesh.obj", format!("mtllib m.mtl\nusemtl a\n{QUAD}").as_bytes())
+            .write("m.mtl", b"newmtl a\nKd 0.5 0.5 0.5\n")
+            .scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}\n[sky]\nmap = \"{name}\"\n")).check()?;
+    }
+
     /// Scene files: valid ones with values replaced or keys added, cut short, or anything.
     #[test]
     fn generated_scene_toml(toml in scene_toml()) {

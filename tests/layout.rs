@@ -157,7 +157,7 @@ fn shared_structs_match_glsl() {
         (18, "GpuCacheGrid", rust_layout!(GpuCacheGrid: origin, dims, entries, _pad)),
         (19, "GpuCacheSlot", rust_layout!(GpuCacheSlot: key, entry, _pad)),
         (20, "GpuCacheSplit", rust_layout!(GpuCacheSplit: plane, children, _pad)),
-        (21, "ComposePush", rust_layout!(ComposePush: background, width, height, apart, _pad)),
+        (21, "ComposePush", rust_layout!(ComposePush: background, width, height, apart, sky)),
         (22, "ExactInterpolatePush", rust_layout!(ExactInterpolatePush: width, count, groups, bias)),
         (
             23,
@@ -165,7 +165,7 @@ fn shared_structs_match_glsl() {
             rust_layout!(GpuSubSample: position, normal, albedo, donor, _pad, visibility, donor_visibility),
         ),
         (25, "GpuSupersampledPixel", rust_layout!(GpuSupersampledPixel: emission, pixel, _pad)),
-        (24, "ResolvePush", rust_layout!(ResolvePush: background, width, count, samples, groups, bias, exact, _pad)),
+        (24, "ResolvePush", rust_layout!(ResolvePush: width, count, samples, groups, bias, exact, _pad)),
         (26, "GpuTexture", rust_layout!(GpuTexture: offset, width, height, levels)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");

@@ -12,32 +12,10 @@ use sensorlight::scene::Scene;
 const SUN: Vec3 = Vec3::new(0.5, 1.0, 0.3);
 const ALBEDO: f32 = 0.6;
 
-/// Ground, a back wall, a side wall and a pillar (a box 0.3 × 1.2 × 0.3), under a sun of irradiance
-/// `irradiance` along [`SUN`] and a sky of radiance `sky`, as OBJ, MTL and scene files in `dir`.
+/// The courtyard of `common::courtyard_mesh` under a sun of irradiance `irradiance` along [`SUN`] and a
+/// sky of radiance `sky`, as OBJ, MTL and scene files in `dir`.
 fn courtyard(dir: &Path, size: (u32, u32), irradiance: f32, sky: f32) -> Scene {
-    let mut obj = String::from("mtllib yard.mtl\nusemtl stone\n");
-    let mut n = 0;
-    let mut quad = |obj: &mut String, name: &str, c: [Vec3; 4]| {
-        obj.push_str(&format!("g {name}\n"));
-        for p in c {
-            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
-        }
-        obj.push_str(&format!("f {} {} {} {}\n", n + 1, n + 2, n + 3, n + 4));
-        n += 4;
-    };
-    let v = Vec3::new;
-    quad(&mut obj, "ground", [v(-2.0, 0.0, 2.0), v(2.0, 0.0, 2.0), v(2.0, 0.0, -2.0), v(-2.0, 0.0, -2.0)]);
-    quad(&mut obj, "back", [v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 1.5, -2.0), v(-2.0, 1.5, -2.0)]);
-    quad(&mut obj, "side", [v(-2.0, 0.0, 2.0), v(-2.0, 0.0, -2.0), v(-2.0, 1.5, -2.0), v(-2.0, 1.5, 2.0)]);
-    // The pillar: four sides and a top, counter-clockwise from outside.
-    let (a, b, h) = (-0.15f32, 0.15f32, 1.2f32);
-    quad(&mut obj, "pillar", [v(a, 0.0, b), v(b, 0.0, b), v(b, h, b), v(a, h, b)]);
-    quad(&mut obj, "pillar", [v(b, 0.0, b), v(b, 0.0, a), v(b, h, a), v(b, h, b)]);
-    quad(&mut obj, "pillar", [v(b, 0.0, a), v(a, 0.0, a), v(a, h, a), v(b, h, a)]);
-    quad(&mut obj, "pillar", [v(a, 0.0, a), v(a, 0.0, b), v(a, h, b), v(a, h, a)]);
-    quad(&mut obj, "pillar", [v(a, h, b), v(b, h, b), v(b, h, a), v(a, h, a)]);
-    std::fs::write(dir.join("yard.obj"), obj).unwrap();
-    std::fs::write(dir.join("yard.mtl"), format!("newmtl stone\nKd {ALBEDO} {ALBEDO} {ALBEDO}\n")).unwrap();
+    common::courtyard_mesh(dir, ALBEDO);
     let toml = format!(
         "mesh = \"yard.obj\"\n[camera]\neye = [1.2, 2.0, 3.4]\ntarget = [-0.3, 0.3, -0.5]\nup = [0, 1, 0]\n\
          vfov_deg = 50\n[image]\nwidth = {}\nheight = {}\n[sun]\ndirection = [{}, {}, {}]\nirradiance = {irradiance}\n\

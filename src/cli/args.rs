@@ -1,6 +1,8 @@
 //! Flags shared by several sub-commands, and how they become [`Overrides`]. Defaults shown in `--help` are
 //! taken from the constants in `params`, so they cannot drift from what the program does.
 
+use std::path::PathBuf;
+
 use anyhow::{Result, ensure};
 use clap::Args;
 use glam::Vec3;
@@ -8,7 +10,7 @@ use sensorlight::params::{
     Bounces, DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG,
     DEFAULT_SENSOR, DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
 };
-use sensorlight::scene::{ImageSize, Scene, Sun};
+use sensorlight::scene::{ImageSize, Scene, SkyMap, Sun};
 
 /// What a sensor sees: shared by `render`, `reference` and `bench`.
 #[derive(Args, Clone, Debug, Default)]
@@ -89,9 +91,10 @@ pub fn sensor_size_help() -> String {
     format!("rd: sensor map side in texels (even for hemicubes; cost grows with rd²) [default: {DEFAULT_SENSOR_SIZE}]")
 }
 
-/// The sun, on top of (or in place of) the scene's `[sun]`: shared by `render` and `reference`.
+/// The sun and the sky map, on top of (or in place of) the scene's `[sun]` and `[sky]`: shared by `render`
+/// and `reference`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct SunFlags {
+pub struct LightFlags {
     /// Light the scene with a sun in this direction (x,y,z towards the sun; a 0.53° disc, `scene::sun`)
     /// [default: the scene's [sun], if any]
     #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, value_name = "X,Y,Z")]
@@ -103,9 +106,16 @@ pub struct SunFlags {
     /// The sun's angular diameter in degrees [default: the scene's, else 0.53]
     #[arg(long, value_name = "DEG")]
     pub sun_diameter: Option<f32>,
+    /// Light the scene with this sky: an equirectangular environment map (OpenEXR or Radiance HDR, linear
+    /// radiance, +y up), seen by every ray that leaves the scene [default: the scene's [sky], if any]
+    #[arg(long, value_name = "FILE")]
+    pub sky: Option<PathBuf>,
+    /// Multiply the sky map by this [default: the scene's, else 1]
+    #[arg(long, value_name = "K")]
+    pub sky_strength: Option<f32>,
 }
 
-impl SunFlags {
+impl LightFlags {
     /// The sun these flags ask for over the scene's `current` one: `None` where they ask for nothing.
     pub fn sun(&self, current: Option<&Sun>) -> Result<Option<Sun>> {
         if self.sun.is_none() && self.sun_irradiance.is_none() && self.sun_diameter.is_none() {
@@ -123,6 +133,24 @@ impl SunFlags {
         )
         .map(Some)
         .map_err(|e| anyhow::anyhow!("--sun: {e}"))
+    }
+
+    /// Lights `scene` with the sun and the sky map these flags ask for, in place of its own.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some(sun) = self.sun(scene.sun.as_ref())? {
+            scene.set_sun(sun);
+        }
+        let path = match (&self.sky, &scene.sky) {
+            (Some(path), _) => path.clone(),
+            (None, Some(current)) if self.sky_strength.is_some() => PathBuf::from(&current.name),
+            (None, None) if self.sky_strength.is_some() => {
+                anyhow::bail!("--sky-strength needs a sky map: give one with --sky FILE")
+            }
+            (None, _) => return Ok(()),
+        };
+        let strength = self.sky_strength.or(scene.sky.as_ref().map(|s| s.strength)).unwrap_or(1.0);
+        scene.set_sky(SkyMap::load(&path, strength).map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?);
+        Ok(())
     }
 }
 

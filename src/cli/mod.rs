@@ -24,7 +24,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::{Context as _, Result, bail, ensure};
-use args::SunFlags;
+use args::LightFlags;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::gbuffer::GBufferData;
@@ -125,20 +125,18 @@ fn resolve(scene: Scene, flags: &Overrides) -> Result<(Scene, RenderParams)> {
 
 /// Loads what `path` holds: a scene file, or an OBJ mesh, given a camera that frames it, an image of
 /// `width` × `height` (each by default the automatic camera's), and, if nothing in it emits, a white sky
-/// (background 1,1,1: the image is then never black); lit by the sun `sun` asks for. Anything else is named
+/// (background 1,1,1: the image is then never black); lit by the sun and sky map `lights` asks for. Anything else is named
 /// and refused.
 fn load_input(
     path: &Path,
     flags: &Overrides,
     (width, height): (Option<u32>, Option<u32>),
-    sun: &SunFlags,
+    lights: &LightFlags,
 ) -> Result<(Scene, RenderParams)> {
-    match FileKind::of(path) {
+    let (scene, params) = match FileKind::of(path) {
         FileKind::Scene => {
             let mut scene = Scene::load(path)?;
-            if let Some(sun) = sun.sun(scene.sun.as_ref())? {
-                scene.set_sun(sun);
-            }
+            lights.apply(&mut scene)?;
             warn_all(&scene.warnings);
             resolve(scene, flags)
         }
@@ -150,10 +148,8 @@ fn load_input(
                 height: height.filter(|&h| h > 0).unwrap_or(default.height),
             };
             let mut scene = Scene::from_mesh(path, size)?;
-            if let Some(sun) = sun.sun(None)? {
-                scene.set_sun(sun);
-            }
-            if !scene.mesh.emits_light() {
+            lights.apply(&mut scene)?;
+            if !scene.mesh.emits_light() && scene.sky.is_none() {
                 scene.warnings.retain(|w| w != Mesh::NO_EMITTER);
                 let white = toml::Value::Array(vec![toml::Value::Float(1.0); 3]);
                 scene.render.insert("background".into(), white);
@@ -172,7 +168,16 @@ fn load_input(
             resolve(scene, flags)
         }
         kind => bail!("{} is {}; expected a scene file (TOML) or an OBJ mesh", path.display(), kind.describe()),
+    }?;
+    if let Some(sky) = scene.sky.as_ref().filter(|_| params.estimator.background != glam::Vec3::ZERO) {
+        bail!(
+            "{}: the sky map {} and the constant background (--background, or the scene's [render] background) \
+             both say what rays leaving the scene see: give one",
+            scene.path.display(),
+            sky.name
+        );
     }
+    Ok((scene, params))
 }
 
 /// Names a [`ParamError`] found by the library (e.g. a device limit) as the user set the value.

@@ -10,7 +10,7 @@ use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
 
-use super::args::{BounceFlags, EstimatorFlags, ImageFlags, SunFlags};
+use super::args::{BounceFlags, EstimatorFlags, ImageFlags, LightFlags};
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -28,7 +28,7 @@ pub struct ReferenceArgs {
     #[command(flatten)]
     image: ImageFlags,
     #[command(flatten)]
-    sun: SunFlags,
+    sun: LightFlags,
     /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
     /// direction plus, if the scene has emitters, one point on an emitter, combined by multiple importance
     /// sampling (up to 2 rays). With global illumination (--bounces other than 0) the direction is a path:

@@ -18,7 +18,7 @@ use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event, StrategyRequest};
 
 use super::args::{
-    BounceFlags, EstimatorFlags, ImageFlags, RefinementFlags, SunFlags, estimator_help, sensor_size_help,
+    BounceFlags, EstimatorFlags, ImageFlags, LightFlags, RefinementFlags, estimator_help, sensor_size_help,
 };
 use super::progress::{Preview, RenderProgress};
 use super::say;
@@ -39,7 +39,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     image: ImageFlags,
     #[command(flatten)]
-    sun: SunFlags,
+    sun: LightFlags,
     #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
     estimator_kind: Option<EstimatorKind>,
     #[arg(long, help = sensor_size_help())]
@@ -197,7 +197,8 @@ const LIT: f32 = 1e-6;
 /// Why the image is black and what to do, if no pixel of `image` is lit (see [`LIT`]): a render that exits
 /// 0 with a black image and says nothing leaves its user guessing (a camera outside a closed room).
 fn black_image_warning(image: &[glam::Vec4], scene: &Scene, params: &RenderParams, input: &Path) -> Option<String> {
-    let light = scene.mesh.brightest_emission().max(params.estimator.background.max_element());
+    let sky = scene.sky.as_ref().map_or(0.0, |s| s.mean().max_element());
+    let light = scene.mesh.brightest_emission().max(params.estimator.background.max_element()).max(sky);
     if light > 0.0 && image.iter().any(|p| p.truncate().max_element() > LIT * light) {
         return None;
     }

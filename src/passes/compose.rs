@@ -2,7 +2,7 @@
 //! filtered radiance map with its indirect part filtered apart: `R = R_f − I_f + I_i`, `R_f` and `I_f` R and
 //! its indirect part at R's filter radius and `I_i` the indirect part at its own. Also writes that R, the
 //! radiance AOV. A pixel where no surface is seen (`NO_SURFACE` in the G-buffer) shows the background radiance
-//! with alpha 0, a surface alpha 1: the image's alpha is its coverage. CPU twin: `reference::post::compose`.
+//! (under a sky map, the sky over its square, computed on the host) with alpha 0, a surface alpha 1: the image's alpha is its coverage. CPU twin: `reference::post::compose`.
 //! Shader: `glsl/compose.comp`.
 
 use std::sync::Arc;
@@ -28,7 +28,17 @@ impl ComposePass {
         let kernel = ComputeKernel::new(
             device,
             shaders::COMPOSE_COMP,
-            &[(0, storage), (1, storage), (2, image), (3, image), (4, storage), (5, storage), (6, storage), (7, image)],
+            &[
+                (0, storage),
+                (1, storage),
+                (2, image),
+                (3, image),
+                (4, storage),
+                (5, storage),
+                (6, storage),
+                (7, image),
+                (8, storage),
+            ],
             size_of::<ComposePush>() as u32,
             1,
         )?;
@@ -36,8 +46,8 @@ impl ComposePass {
     }
 
     /// `r`: R at R's filter radius, its indirect part at that radius and at its own; `out`: the image and
-    /// the R it was composed from.
-    pub fn bind(&self, device: &Device, r: [&Buffer; 3], out: [&Buffer; 2], gbuffer: &GBuffer) {
+    /// the R it was composed from; `sky`: each pixel's sky (`vec4`; read only when recorded with a sky).
+    pub fn bind(&self, device: &Device, r: [&Buffer; 3], out: [&Buffer; 2], gbuffer: &GBuffer, sky: &Buffer) {
         self.kernel
             .writer(0)
             .storage_buffer(0, r[0])
@@ -48,18 +58,19 @@ impl ComposePass {
             .storage_buffer(5, r[2])
             .storage_buffer(6, out[1])
             .storage_image(7, gbuffer.surface.view)
+            .storage_buffer(8, sky)
             .apply(device);
     }
 
     /// `apart`: whether the indirect part was filtered at a radius of its own (else R is taken as it is);
-    /// `background`: what pixels without a surface show.
-    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, apart: bool, background: Vec3) {
+    /// `background`: what pixels without a surface show, `None` for the sky bound with them.
+    pub fn record(&self, enc: &Encoder<'_>, size: ImageSize, apart: bool, background: Option<Vec3>) {
         let push = ComposePush {
-            background: background.extend(0.0).to_array(),
+            background: background.unwrap_or(Vec3::ZERO).extend(0.0).to_array(),
             width: size.width,
             height: size.height,
             apart: apart as u32,
-            _pad: 0,
+            sky: background.is_none() as u32,
         };
         self.kernel.dispatch(enc, 0, &push, [groups_for(size.width, 8), groups_for(size.height, 8), 1]);
     }

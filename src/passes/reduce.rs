@@ -21,6 +21,11 @@ pub struct ReducePass {
     kernel: ComputeKernel,
     /// f32 weight per texel of one sensor's main layers ([layer][row][col]).
     weights: Buffer,
+    /// Per texel of the main layers: its direction in the sensor frame and its solid angle (`vec4`), where
+    /// it sees the sky map.
+    directions: Buffer,
+    /// The scene's sky map: its table entry and texels.
+    sky: (Arc<Buffer>, Arc<Buffer>),
     /// The scene's light groups (their ranges of emitter chunks), and how many chunks it has.
     groups: Arc<Buffer>,
     chunks: u32,
@@ -55,15 +60,19 @@ impl ReducePass {
         let (layout, rd) = (desc.layout, desc.rd);
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut bindings = vec![(0, vk::DescriptorType::STORAGE_IMAGE)];
-        bindings.extend((1..=9).map(|b| (b, storage)));
+        bindings.extend((1..=12).map(|b| (b, storage)));
         let kernel =
             ComputeKernel::new(device, shaders::REDUCE_COMP, &bindings, size_of::<ReducePush>() as u32, slots)?;
         let w: Vec<f32> = weights::sensor_weights(layout.kind, rd).into_iter().map(|w| w as f32).collect();
         let weights = transfer::upload(device, "texel weights", &w, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let d = weights::texel_directions(layout.kind, rd);
+        let directions = transfer::upload(device, "texel directions", &d, vk::BufferUsageFlags::STORAGE_BUFFER)?;
         let emission_scale = super::sensor_maps::emission_scale(scene, desc.fronts);
         Ok(Self {
             kernel,
             weights,
+            directions,
+            sky: (scene.sky.clone(), scene.sky_texels.clone()),
             groups: scene.groups.clone(),
             chunks: scene.chunk_count,
             emission_scale,
@@ -86,6 +95,9 @@ impl ReducePass {
             .storage_buffer(7, b.irradiance)
             .storage_buffer(8, &self.groups)
             .storage_buffer(9, b.indirect)
+            .storage_buffer(10, &self.directions)
+            .storage_buffer(11, &self.sky.0)
+            .storage_buffer(12, &self.sky.1)
             .apply(device);
     }
 

@@ -7,7 +7,6 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
-use glam::Vec3;
 
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSubSample, GpuSupersampledPixel, ResolvePush};
@@ -44,13 +43,13 @@ impl ResolvePass {
     /// Uploads the supersampled `pixels` (with their exact emission) and their `samples`
     /// (`supersample::SAMPLES` each) and binds the
     /// targets (call while the GPU is idle). `exact`: the light groups' light is computed at each sample
-    /// (sensors lifted by `bias`); `background`: what a sample that leaves the scene sees.
+    /// (sensors lifted by `bias`). A sample that leaves the scene carries the sky it sees in its albedo.
     pub fn bind(
         &mut self,
         device: &Arc<Device>,
         (pixels, samples): (&[GpuSupersampledPixel], &[GpuSubSample]),
         t: ResolveTargets<'_>,
-        (exact, bias, background): (bool, f32, Vec3),
+        (exact, bias): (bool, f32),
     ) -> Result<()> {
         (self.inputs, self.push) = (None, None);
         if pixels.is_empty() {
@@ -72,7 +71,6 @@ impl ResolvePass {
             .storage_buffer(9, &t.scene.groups)
             .apply(device);
         self.push = Some(ResolvePush {
-            background: background.extend(0.0).to_array(),
             width: t.gbuffer.size.width,
             count: pixels.len() as u32,
             samples: (samples.len() / pixels.len()) as u32,

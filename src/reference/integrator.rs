@@ -1,7 +1,8 @@
 //! The estimator of docs/DESIGN.md §1 by ray casting:
 //!
 //! `R(p) = (1/π) ∫ Ck(ray(p, ω)) cosθ dω`, `Ck = Ke` on the front of an emitter, `Kd·ε` elsewhere,
-//! the background where the ray leaves the scene; pixel = `Le + Kd·R`.
+//! the sky (the constant background, or the sky map along the ray) where the ray leaves the scene;
+//! pixel = `Le + Kd·R`.
 //!
 //! With global illumination (`Indirect::Bounces`) `Ck(q)` is the radiance that really leaves the first hit
 //! `q`: `Le(q) + Kd(q)·R(q)`, `R(q)` over the whole hemisphere of the side the ray arrived on. Everything
@@ -18,7 +19,10 @@
 //! Each sample is a pair of two strategies, combined by multiple importance sampling (Veach & Guibas 1995):
 //! - a cosine-distributed direction (density `cosθ/π`), which sees everything: emitters, `Kd·ε`, background;
 //! - a point on an emitter ([`Lights`]: triangle by power, then uniform by area; as a direction its density
-//!   is `P_t/A_t · d²/cosθ_l`), which finds small and far lights that directions almost never hit.
+//!   is `P_t/A_t · d²/cosθ_l`), which finds small and far lights that directions almost never hit;
+//! - with a sky map, a direction drawn by the map's luminance (`SkyMap::sample`), which finds a bright
+//!   patch of sky (a sun in the map) that cosine directions rarely meet. The sky a direction sees where it
+//!   leaves the scene is weighted against it by the power heuristic as an emitter's light is.
 //!
 //! `Ck` splits into the emitted part (the front of an emitter is the first hit) and the rest. The emitted
 //! part, light by light (`t` hit first), is estimated by both strategies, each weighted by the power
@@ -42,7 +46,7 @@
 use std::f64::consts::PI;
 
 use anyhow::{Result, ensure};
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::lights::{LUMINANCE, Lights};
@@ -64,6 +68,8 @@ const LIGHT_STREAM: u64 = 0x4c49_4748_5453_0000;
 const PATH_STREAM: u64 = 0x5041_5448_5300_0000;
 /// Mixed into a replicate's key for its samples' points in the pixel's square (`Antialiasing::On`).
 const PIXEL_STREAM: u64 = 0x5049_5845_4c53_0000;
+/// Mixed into a replicate's key for its directions drawn from the sky map.
+const SKY_STREAM: u64 = 0x534b_5900_0000_0000;
 
 pub struct Integrator<'a> {
     pub(super) scene: &'a Scene,
@@ -86,7 +92,9 @@ enum Seen {
     /// The front of an emitter: `ke`, at distance `t` along the unit ray, whose direction makes cosine
     /// `cos_light` with the triangle's normal.
     Emitter { triangle: u32, ke: Vec3, t: f32, cos_light: f32 },
-    /// Anything else: its `Ck` (`Kd·ε` or the background).
+    /// No surface: the sky's radiance along the ray.
+    Sky(Vec3),
+    /// Anything else: its `Ck` (`Kd·ε`).
     Other(Vec3),
 }
 
@@ -119,7 +127,19 @@ impl Estimate {
 struct Streams {
     directions: ScrambledSobol,
     points: ScrambledSobol,
+    sky: ScrambledSobol,
     paths: HashedStream,
+}
+
+impl Streams {
+    fn new(replicate: u64) -> Self {
+        Self {
+            directions: ScrambledSobol::new(replicate),
+            points: ScrambledSobol::new(replicate ^ LIGHT_STREAM),
+            sky: ScrambledSobol::new(replicate ^ SKY_STREAM),
+            paths: HashedStream::new(replicate ^ PATH_STREAM),
+        }
+    }
 }
 
 pub struct ReferenceImage {
@@ -170,13 +190,24 @@ impl<'a> Integrator<'a> {
     pub fn ck(&self, ray: &Ray) -> Vec3 {
         match self.first_hit(ray) {
             Seen::Emitter { ke, .. } => ke,
-            Seen::Other(ck) => ck,
+            Seen::Sky(l) | Seen::Other(l) => l,
         }
+    }
+
+    /// The radiance of a ray along the unit direction `d` that leaves the scene: the sky map's, else the
+    /// constant background.
+    pub(super) fn sky(&self, d: Vec3) -> Vec3 {
+        self.scene.sky.as_ref().map_or(self.params.background, |sky| sky.radiance(d))
+    }
+
+    /// The density per steradian with which [`Self::sky_sample`] draws `d` (0 without a sky map to sample).
+    pub(super) fn sky_pdf(&self, d: Vec3) -> f64 {
+        self.scene.sky.as_ref().map_or(0.0, |sky| sky.pdf(d) as f64)
     }
 
     fn first_hit(&self, ray: &Ray) -> Seen {
         let Some(hit) = self.bvh.intersect(ray, self.near, f32::INFINITY) else {
-            return Seen::Other(self.params.background);
+            return Seen::Sky(self.sky(ray.dir));
         };
         let tri = &self.scene.mesh.triangles[hit.triangle as usize];
         let material = self.scene.mesh.material_of(tri.surface);
@@ -203,10 +234,7 @@ impl<'a> Integrator<'a> {
         let mut rays = 0;
         for (r, mean) in means.iter_mut().enumerate() {
             let replicate = self.replicate(key, r);
-            let directions = ScrambledSobol::new(replicate);
-            let points = ScrambledSobol::new(replicate ^ LIGHT_STREAM);
-            let paths = HashedStream::new(replicate ^ PATH_STREAM);
-            let streams = Streams { directions, points, paths };
+            let streams = Streams::new(replicate);
             let sum: Vec3 = (0..per_replicate).map(|i| self.sample(&sensor, &streams, i, &mut rays)).sum();
             *mean = sum / per_replicate as f32;
         }
@@ -229,7 +257,7 @@ impl<'a> Integrator<'a> {
         if let Some(lights) = &self.lights {
             r += self.light_sample(sensor, lights, streams.points.bits(i), self.frustum, rays);
         }
-        r
+        r + self.sky_sample(sensor, streams.sky.point(i), self.frustum, rays)
     }
 
     /// The pixel `(x, y)` of an image of `size` integrated over its square (a box filter, as a camera's sensor
@@ -242,11 +270,7 @@ impl<'a> Integrator<'a> {
         let mut rays = 0;
         for r in 0..REPLICATES as usize {
             let replicate = self.replicate(key, r);
-            let streams = Streams {
-                directions: ScrambledSobol::new(replicate),
-                points: ScrambledSobol::new(replicate ^ LIGHT_STREAM),
-                paths: HashedStream::new(replicate ^ PATH_STREAM),
-            };
+            let streams = Streams::new(replicate);
             let square = ScrambledSobol::new(replicate ^ PIXEL_STREAM);
             // Sample i's point of the square is the net's point order[i]: with the same index, two scrambles
             // of one Sobol net are correlated (which samples meet a surface would bias their directions).
@@ -257,7 +281,7 @@ impl<'a> Integrator<'a> {
                 let ray = self.scene.camera.ray(x as f32 + u.x, y as f32 + u.y, size.width, size.height);
                 rays += 1;
                 let Some(v) = gbuffer::first_surface(self.scene, &self.bvh, &ray) else {
-                    image += self.params.background;
+                    image += self.sky(ray.dir);
                     continue;
                 };
                 let sensor = SensorFrame::new(v.position.truncate(), v.normal.truncate(), self.bias);
@@ -286,8 +310,28 @@ impl<'a> Integrator<'a> {
                 let p_light = lights.area_pdf(triangle) * (t as f64).powi(2) / cos_light as f64;
                 ke * power_heuristic(p_cosine, p_light) as f32
             }
+            Seen::Sky(l) => l * power_heuristic(local.z as f64 / PI, self.sky_pdf(sensor.to_world(local))) as f32,
             Seen::Other(ck) => ck,
         }
+    }
+
+    /// One direction drawn from the sky map, from the uniform pair `u`: `L·cosθ/π / p_sky`, MIS-weighted
+    /// against the cosine directions, if it lies in the sensor's domain (`frustum`: see
+    /// [`Integrator::frustum`]) and leaves the scene. Nothing without a sky map (or with a black one).
+    pub(super) fn sky_sample(&self, sensor: &SensorFrame, u: Vec2, frustum: Option<f32>, rays: &mut u64) -> Vec3 {
+        let Some((dir, p_sky)) = self.scene.sky.as_ref().and_then(|sky| sky.sample(u)) else {
+            return Vec3::ZERO;
+        };
+        let local = Vec3::new(dir.dot(sensor.t), dir.dot(sensor.b), dir.dot(sensor.n));
+        if !inside(local, frustum) {
+            return Vec3::ZERO;
+        }
+        *rays += 1;
+        if self.bvh.intersect(&Ray::new(sensor.origin, dir), self.near, f32::INFINITY).is_some() {
+            return Vec3::ZERO;
+        }
+        let (p_sky, p_cosine) = (p_sky as f64, local.z as f64 / PI);
+        self.sky(dir) * (p_cosine / p_sky * power_heuristic(p_sky, p_cosine)) as f32
     }
 
     /// One point on an emitter, from the 32-bit pair `u`: `Ke·cosθ/π / p_l`, MIS-weighted against the
@@ -356,20 +400,26 @@ impl<'a> Integrator<'a> {
                 row
             })
             .collect();
-        // Alpha: 1 where the pixel's centre shows a surface (as the GPU G-buffer's coverage).
-        let field = |f: &dyn Fn(&(Estimate, Estimate, u64)) -> Vec3, on_background: Vec3| -> Vec<Vec4> {
-            (estimates.iter().zip(&g.surface))
-                .map(|(e, &id)| {
-                    let alpha = if id == crate::scene::NO_SURFACE { 0.0 } else { 1.0 };
-                    e.as_ref().map_or(on_background, f).extend(alpha)
-                })
-                .collect()
+        // Alpha: 1 where the pixel's centre shows a surface (as the GPU G-buffer's coverage). A pixel without
+        // an estimate (`Off`, no surface) shows the sky along its centre's ray.
+        let sky_at = |i: usize| {
+            let (x, y) = ((i % width) as f32 + 0.5, (i / width) as f32 + 0.5);
+            self.sky(self.scene.camera.ray(x, y, size.width, size.height).dir)
         };
+        let field = |f: &dyn Fn(&(Estimate, Estimate, u64)) -> Vec3, on_background: &dyn Fn(usize) -> Vec3| {
+            (estimates.iter().zip(&g.surface).enumerate())
+                .map(|(i, (e, &id))| {
+                    let alpha = if id == crate::scene::NO_SURFACE { 0.0 } else { 1.0 };
+                    e.as_ref().map_or_else(|| on_background(i), f).extend(alpha)
+                })
+                .collect::<Vec<Vec4>>()
+        };
+        let zero = |_| Vec3::ZERO;
         ReferenceImage {
-            image: field(&|e| e.0.mean, self.params.background),
-            image_std_error: field(&|e| e.0.std_error, Vec3::ZERO),
-            radiance: field(&|e| e.1.mean, Vec3::ZERO),
-            std_error: field(&|e| e.1.std_error, Vec3::ZERO),
+            image: field(&|e| e.0.mean, &sky_at),
+            image_std_error: field(&|e| e.0.std_error, &zero),
+            radiance: field(&|e| e.1.mean, &zero),
+            std_error: field(&|e| e.1.std_error, &zero),
             rays: g.position.len() as u64 * (aa == Antialiasing::Off) as u64
                 + estimates.iter().flatten().map(|e| e.2).sum::<u64>(),
             gbuffer: g,

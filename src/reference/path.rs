@@ -11,7 +11,8 @@
 //! - next-event estimation: a point on an emitter (by power), MIS-weighted (power heuristic) against
 //! - a cosine direction over the whole hemisphere, which continues the path: the front of an emitter it hits
 //!   adds that emitter's `Ke`, MIS-weighted against `x_k`'s light point; where it leaves the scene, the
-//!   background (which no light point can find: weight 1).
+//!   sky: the constant background (which no sample finds otherwise: weight 1), or the sky map's radiance,
+//!   MIS-weighted against `x_k`'s direction drawn from the map (next-event estimation of the sky).
 //!
 //! The throughput `β` is the product of the `Kd` met beyond `p` (each cosine direction's density `cosθ/π`
 //! cancels the Lambertian's `Kd·cosθ/π`), so a path's value is `Σ_k β_k·(direct light at x_k)`.
@@ -78,7 +79,8 @@ impl Integrator<'_> {
         loop {
             *rays += 1;
             let Some(hit) = self.bvh.intersect(&ray, self.near, f32::INFINITY) else {
-                return radiance + beta * self.params.background;
+                let weight = power_heuristic(p_cosine, self.sky_pdf(ray.dir));
+                return radiance + beta * self.sky(ray.dir) * weight as f32;
             };
             let tri = &self.scene.mesh.triangles[hit.triangle as usize];
             let material = self.scene.mesh.material_of(tri.surface);
@@ -113,6 +115,7 @@ impl Integrator<'_> {
             if let Some(lights) = &self.lights {
                 radiance += beta * self.light_sample(&frame, lights, u.light, None, rays);
             }
+            radiance += beta * self.sky_sample(&frame, u.sky, None, rays);
             let local = cosine_hemisphere(u.direction);
             p_cosine = local.z as f64 / PI;
             ray = Ray::new(frame.origin, frame.to_world(local));

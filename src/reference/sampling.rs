@@ -87,7 +87,8 @@ pub struct HashedStream {
     key: u64,
 }
 
-/// What one path vertex draws: a point on an emitter, a cosine direction, a Russian-roulette decision.
+/// What one path vertex draws: a point on an emitter, a cosine direction, a Russian-roulette decision, a
+/// direction towards the sky map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VertexSamples {
     /// 32-bit fixed point, as [`ScrambledSobol::bits`] (the light pick reuses the low digits).
@@ -96,6 +97,8 @@ pub struct VertexSamples {
     pub direction: Vec2,
     /// In [0, 1).
     pub roulette: f32,
+    /// In [0, 1)², for `SkyMap::sample`.
+    pub sky: Vec2,
 }
 
 impl HashedStream {
@@ -107,11 +110,12 @@ impl HashedStream {
     pub fn vertex(&self, sample: u32, depth: u32) -> VertexSamples {
         let path = hash(self.key ^ sample as u64);
         let word = |k: u64| hash(path ^ ((depth as u64) << 2 | k));
-        let (light, direction, roulette) = (word(0), word(1), word(2));
+        let (light, direction, roulette, sky) = (word(0), word(1), word(2), word(3));
         VertexSamples {
             light: (light as u32, (light >> 32) as u32),
             direction: Vec2::new(unit(direction as u32), unit((direction >> 32) as u32)),
             roulette: unit(roulette as u32),
+            sky: Vec2::new(unit(sky as u32), unit((sky >> 32) as u32)),
         }
     }
 }

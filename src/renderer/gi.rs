@@ -18,7 +18,7 @@ use crate::gi::solve::{Next, Solver};
 use crate::gpu_scene::GpuCache;
 use crate::gpu_types::GpuSensorResult;
 use crate::params::Bounces;
-use crate::passes::sensor_maps::CkParams;
+use crate::passes::sensor_maps::{Background, CkParams};
 use crate::scene::ImageSize;
 use crate::vk::{Device, transfer};
 
@@ -115,8 +115,8 @@ fn sense(runner: &mut BatchRunner, g: &GBufferData, ck: CkParams, progress: &dyn
     Ok(r)
 }
 
-/// Senses the cache's bounces and leaves the result in `gpu.values`; `background`: radiance of rays leaving
-/// the scene.
+/// Senses the cache's bounces and leaves the result in `gpu.values`; `background`: what rays leaving the
+/// scene see.
 ///
 /// Bounce 1's R at an entry is its direct light (emitters only, the background black: the only pass with
 /// zoom views and the emitter pass) and what it sees of the background. Bounce k adds what its maps see of
@@ -127,7 +127,7 @@ pub(super) fn solve(
     device: &Arc<Device>,
     runners: Runners<'_>,
     (cache, gpu): (&RadianceCache, &GpuCache),
-    (bounces, background): (Bounces, Vec3),
+    (bounces, background): (Bounces, Background),
     progress: &dyn Progress,
 ) -> Result<GiStats> {
     let start = Instant::now();
@@ -141,9 +141,9 @@ pub(super) fn solve(
     runners.later.bind(&maps)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
     // The first bounce: the direct light, and what the entries see of the background (its own pass).
-    let sky_pass = if background != Vec3::ZERO { n } else { 0 };
+    let sky_pass = if background.is_black() { 0 } else { n };
     progress.queued((first.len() + sky_pass) as u64);
-    let direct = CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: false };
+    let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: false };
     let sensed = sense(runners.first, &first_g, direct, progress)?;
     let mut r = sensed[..n].to_vec();
     let mut spread = vec![(Vec3::ZERO, 0u32); n];
@@ -152,7 +152,7 @@ pub(super) fn solve(
     }
     r.iter_mut().zip(spread).filter(|(_, (_, count))| *count > 0).for_each(|(r, (sum, count))| *r = sum / count as f32);
     let first_seconds = start.elapsed().as_secs_f64();
-    if background != Vec3::ZERO {
+    if !background.is_black() {
         let sky = sense(runners.later, &g, CkParams { epsilon: 0.0, background, cache: false }, progress)?;
         r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
     }
@@ -160,8 +160,12 @@ pub(super) fn solve(
         let bounce = solver.bounces() + 1;
         if bounce > 1 {
             progress.queued(n as u64);
-            let added =
-                sense(runners.later, &g, CkParams { epsilon: 0.0, background: Vec3::ZERO, cache: true }, progress)?;
+            let added = sense(
+                runners.later,
+                &g,
+                CkParams { epsilon: 0.0, background: Background::BLACK, cache: true },
+                progress,
+            )?;
             r.iter_mut().zip(added).for_each(|(r, a)| *r += a);
         }
         let next = solver.step(&cache.entries, &cache.albedo, &r);

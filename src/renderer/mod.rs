@@ -39,7 +39,7 @@ use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::{self, InterpolatePass};
 use crate::passes::resolve::ResolvePass;
-use crate::passes::sensor_maps::{CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
+use crate::passes::sensor_maps::{Background, CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene, Texture, texture};
 use crate::sensors::SensorKind;
@@ -487,6 +487,8 @@ struct Targets {
     indirect_own: Buffer,
     composed: Buffer,
     image: Buffer,
+    /// Under a sky map, the sky each pixel shows where no surface is (`vec4`; one unread texel without).
+    sky: Buffer,
 }
 
 impl Renderer {
@@ -636,13 +638,13 @@ impl Renderer {
     pub fn solve_cache(&mut self, frame: &FrameParams, progress: &dyn Progress) -> Result<Option<GiStats>> {
         self.cache_solved = false;
         let Some(bounces) = frame.indirect.bounces() else { return Ok(None) };
+        let background = self.background(frame);
         let (cache, later) = self.cache.as_mut().context(
             "this renderer was built without a radiance cache (RendererBuilder::radiance_cache): it renders the \
              paper's ε only",
         )?;
         let runners = gi::Runners { first: &mut self.runner, later };
-        let stats =
-            gi::solve(&self.device, runners, (cache, &self.scene.cache), (bounces, frame.background), progress)?;
+        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), (bounces, background), progress)?;
         self.cache_solved = true;
         Ok(Some(stats))
     }
@@ -662,7 +664,13 @@ impl Renderer {
     /// What the sensor maps see on surfaces for `frame`: its ε, or the radiance cache once solved.
     fn ck(&self, frame: &FrameParams) -> CkParams {
         let cache = self.cache_solved && frame.indirect.bounces().is_some();
-        CkParams { epsilon: frame.indirect.epsilon(), background: frame.background, cache }
+        CkParams { epsilon: frame.indirect.epsilon(), background: self.background(frame), cache }
+    }
+
+    /// What the sensors see where their rays leave the scene: the scene's sky map, else `frame`'s constant
+    /// background.
+    fn background(&self, frame: &FrameParams) -> Background {
+        if self.host.sky.is_some() { Background::SkyMap } else { Background::Constant(frame.background) }
     }
 
     /// R sensed at `pixels` (surface pixels of the image at `size`), and the host time sensing took
@@ -697,6 +705,10 @@ impl Renderer {
         progress.phase(Phase::GBuffer);
         let gbuffer_start = Instant::now();
         let (gpu_gbuffer, g) = self.render_gbuffer(size)?;
+        // Under a sky map, the sky each pixel shows where no surface is: over its square (64 points) or at
+        // its centre, as the pixel is.
+        let side = if frame.aa == Antialiasing::On { 8 } else { 1 };
+        let sky = self.host.sky.as_ref().map(|sky| sky.pixels(&self.host.camera, size, side));
         let targets = Targets {
             gbuffer: gpu_gbuffer,
             sensed: SensedMaps::new(&device, size)?,
@@ -709,6 +721,13 @@ impl Renderer {
             indirect_own: map_buffer(&device, "indirect map, filtered", size)?,
             composed: map_buffer(&device, "composed radiance map", size)?,
             image: map_buffer(&device, "final image", size)?,
+            sky: {
+                let texels: Vec<Vec4> = match &sky {
+                    Some(sky) => sky.iter().map(|s| s.extend(0.0)).collect(),
+                    None => vec![Vec4::ZERO],
+                };
+                transfer::upload(&device, "sky pixels", &texels, vk::BufferUsageFlags::STORAGE_BUFFER)?
+            },
         };
         device.submit_and_wait(|enc| {
             enc.fill(&targets.sensed.radiance, 0);
@@ -788,7 +807,7 @@ impl Renderer {
                         lights: &self.scene.lights,
                         bias,
                     });
-                    let image = preview(&g, &r, &refinement, frame.background, light);
+                    let image = preview(&g, &r, &refinement, (frame.background, sky.as_deref()), light);
                     progress.snapshot(&Snapshot { round, size, image });
                 }
             }
@@ -836,6 +855,7 @@ impl Renderer {
             [&t.filtered, &t.indirect_at_r, &t.indirect_own],
             [&t.image, &t.composed],
             &t.gbuffer,
+            &t.sky,
         );
         device.submit_and_wait(|enc| {
             barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
@@ -847,7 +867,7 @@ impl Renderer {
                 self.filter.record(enc, 2, size, frame.indirect_filter_radius);
             }
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.compose.record(enc, size, apart, frame.background);
+            self.compose.record(enc, size, apart, sky.is_none().then_some(frame.background));
             Ok(())
         })?;
         // The supersampled pixels, a slice at a time: their samples' R from their donors, the mean over each.
@@ -931,7 +951,7 @@ fn preview(
     g: &GBufferData,
     r: &[Vec4],
     refinement: &Refinement,
-    background: glam::Vec3,
+    (background, sky): (glam::Vec3, Option<&[glam::Vec3]>),
     light: Option<PreviewLight<'_>>,
 ) -> Vec<Vec4> {
     use crate::gpu_types::radiance_state::SENSED;
@@ -950,9 +970,9 @@ fn preview(
         }
         None => refine::interpolate_cpu(&mut radiance, g.size.width, &quads),
     }
-    (g.surface.iter().zip(&g.emission).zip(&g.albedo).zip(&radiance))
-        .map(|(((&id, le), kd), r)| match id {
-            crate::scene::NO_SURFACE => background.extend(0.0),
+    (g.surface.iter().zip(&g.emission).zip(&g.albedo).zip(&radiance).enumerate())
+        .map(|(i, (((&id, le), kd), r))| match id {
+            crate::scene::NO_SURFACE => sky.map_or(background, |s| s[i]).extend(0.0),
             _ => (le.truncate() + kd.truncate() * r.truncate()).extend(1.0),
         })
         .collect()

@@ -50,7 +50,12 @@ impl Renderer {
                     near,
                 },
             );
-            let samples = supersample::sub_samples(g, (plan, range.clone(), &seen), sample_light);
+            let mut samples = supersample::sub_samples(g, (plan, range.clone(), &seen), sample_light);
+            let camera = &self.host.camera;
+            supersample::carry_sky(&mut samples, (plan, range.clone()), g.size.width, |at| match &self.host.sky {
+                Some(sky) => sky.radiance(camera.ray(at.x, at.y, g.size.width, g.size.height).dir),
+                None => background,
+            });
             let t = ResolveTargets {
                 composed: &targets.composed,
                 image: &targets.image,
@@ -59,7 +64,7 @@ impl Renderer {
                 scene: &self.scene,
             };
             let exact = light.is_some();
-            self.resolve.bind(&device, (&plan.gpu_pixels(range.clone()), &samples), t, (exact, bias, background))?;
+            self.resolve.bind(&device, (&plan.gpu_pixels(range.clone()), &samples), t, (exact, bias))?;
             device.submit_and_wait(|enc| {
                 barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
                 self.resolve.record(enc);

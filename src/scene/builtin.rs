@@ -39,6 +39,7 @@ pub fn from_groups(
         image: size,
         render,
         sun: None,
+        sky: None,
         warnings,
         notes: Vec::new(),
         inputs: Vec::new(),

@@ -14,6 +14,9 @@
 //! direction = [0.3, 1, 0.2]     # towards the sun
 //! irradiance = 3.14             # or [r, g, b]; on a surface facing it (default π)
 //! angular_diameter_deg = 0.53   # the default
+//! [sky]                         # optional: an environment map (scene::sky) in place of the background
+//! map = "sky.exr"               # equirectangular, linear radiance (OpenEXR or Radiance HDR), +y up
+//! strength = 1.0                # its texels are multiplied by this (default 1)
 //! [render]                      # optional; every key is also a CLI flag, which wins
 //! sensor = "hemicube"           # or "frustum"
 //! ```
@@ -34,6 +37,7 @@ pub struct SceneFile {
     pub camera: Option<CameraSection>,
     pub image: ImageSection,
     pub sun: Option<SunSection>,
+    pub sky: Option<SkySection>,
     /// Render parameters for this scene, uninterpreted here.
     #[serde(default)]
     pub render: toml::Table,
@@ -59,6 +63,14 @@ pub struct SunSection {
     pub direction: [f32; 3],
     pub irradiance: Option<Colour>,
     pub angular_diameter_deg: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkySection {
+    /// The map, relative to the TOML file.
+    pub map: PathBuf,
+    pub strength: Option<f32>,
 }
 
 /// A colour written as one number (grey) or three.
@@ -95,6 +107,11 @@ impl SceneFile {
 
     /// The mesh path resolved against the directory of the scene file.
     pub fn mesh_path(&self, scene_path: &Path) -> PathBuf {
-        scene_path.parent().unwrap_or(Path::new(".")).join(&self.mesh)
+        self.relative_path(scene_path, &self.mesh)
+    }
+
+    /// `path` as written in the file at `scene_path`: relative to that file's directory.
+    pub fn relative_path(&self, scene_path: &Path, path: &Path) -> PathBuf {
+        scene_path.parent().unwrap_or(Path::new(".")).join(path)
     }
 }

@@ -10,12 +10,14 @@ pub mod gltf;
 pub mod kind;
 pub mod obj;
 pub mod ray;
+pub mod sky;
 pub mod sun;
 pub mod surfaces;
 pub mod texture;
 mod unrendered;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{Context as _, Result, bail, ensure};
 use glam::{Vec2, Vec3};
@@ -24,6 +26,7 @@ pub use camera::Camera;
 pub use kind::FileKind;
 pub use obj::Material;
 pub use ray::Ray;
+pub use sky::SkyMap;
 pub use sun::Sun;
 pub use texture::Texture;
 
@@ -360,6 +363,8 @@ pub struct Scene {
     pub render: toml::Table,
     /// The sun, whose disc is the mesh's last surface (`Mesh::add_sun`).
     pub sun: Option<Sun>,
+    /// The environment map rays that leave the scene see (`scene::sky`); none: the constant background.
+    pub sky: Option<Arc<SkyMap>>,
     /// Warnings met while loading (undefined materials, dropped triangles, no emitter, `Kd` above 1, …).
     pub warnings: Vec<String>,
     /// What a user should know that is not a problem (where the automatic camera was put, and why).
@@ -421,6 +426,15 @@ impl Scene {
             ),
             None => file_sun,
         };
+        let sky = match &file.sky {
+            Some(s) => {
+                let map = file.relative_path(path, &s.map);
+                let sky = SkyMap::load(&map, s.strength.unwrap_or(1.0))
+                    .with_context(|| format!("{}: [sky]", path.display()))?;
+                Some(Arc::new(sky))
+            }
+            None => None,
+        };
         let mut warnings = obj.warnings;
         let mut mesh = Mesh::new(&obj.groups, obj.materials, obj.textures, &mut warnings)
             .with_context(|| mesh_path.display().to_string())?;
@@ -428,8 +442,12 @@ impl Scene {
             mesh.add_sun(sun);
         }
         warnings.extend(mesh.lighting_warnings());
+        if sky.is_some() {
+            warnings.retain(|w| w != Mesh::NO_EMITTER);
+        }
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
+        inputs.extend(sky.as_ref().map(|s| PathBuf::from(&s.name)));
         let mesh_file = Some(mesh_path);
         Ok(Self {
             path: path.to_owned(),
@@ -438,6 +456,7 @@ impl Scene {
             image,
             render: file.render,
             sun,
+            sky,
             warnings,
             notes: Vec::new(),
             inputs,
@@ -537,7 +556,19 @@ impl Scene {
         let render = toml::Table::new();
         let mesh_file = Some(path.to_owned());
         let inputs = obj.files;
-        Ok(Self { path: path.to_owned(), mesh, camera, image, render, sun, warnings, notes, inputs, mesh_file })
+        Ok(Self {
+            path: path.to_owned(),
+            mesh,
+            camera,
+            image,
+            render,
+            sun,
+            sky: None,
+            warnings,
+            notes,
+            inputs,
+            mesh_file,
+        })
     }
 
     /// Lights the scene with `sun`, in place of its own if it has one (warnings about the light said again).
@@ -547,6 +578,18 @@ impl Scene {
         }
         self.mesh.add_sun(&sun);
         self.sun = Some(sun);
+        self.warnings.retain(|w| w != Mesh::NO_EMITTER);
+    }
+
+    /// Lights the scene with the environment map `sky` (in place of its own, if any): rays that leave the
+    /// scene see it instead of the constant background. Its file joins the inputs no output may overwrite.
+    pub fn set_sky(&mut self, sky: SkyMap) {
+        if let Some(old) = &self.sky {
+            let old = PathBuf::from(&old.name);
+            self.inputs.retain(|p| *p != old);
+        }
+        self.inputs.push(PathBuf::from(&sky.name));
+        self.sky = Some(Arc::new(sky));
         self.warnings.retain(|w| w != Mesh::NO_EMITTER);
     }
 
@@ -592,6 +635,18 @@ impl Scene {
             table.insert("irradiance".into(), vec(sun.irradiance));
             table.insert("angular_diameter_deg".into(), num(sun.angular_diameter_deg));
             doc.insert("sun".into(), toml::Value::Table(table));
+        }
+        if let Some(sky) = &self.sky {
+            let map = std::fs::canonicalize(&sky.name).with_context(|| sky.name.clone())?;
+            let map = match std::fs::canonicalize(dir) {
+                Ok(dir) => map.strip_prefix(&dir).map(Path::to_owned).unwrap_or(map),
+                Err(_) => map,
+            };
+            let mut table = toml::Table::new();
+            let map = map.to_str().with_context(|| format!("{}: not UTF-8", map.display()))?;
+            table.insert("map".into(), toml::Value::String(map.to_owned()));
+            table.insert("strength".into(), num(sky.strength));
+            doc.insert("sky".into(), toml::Value::Table(table));
         }
         if !render.is_empty() {
             doc.insert("render".into(), toml::Value::Table(render.clone()));

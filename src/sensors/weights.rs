@@ -10,8 +10,11 @@
 //!
 //! Computed in f64 once per (kind, rd) and uploaded as f32.
 
+use glam::{Vec3, Vec4};
+
 use super::SensorKind;
-use super::layout::{LayerKind, layers};
+use super::frame::SensorFrame;
+use super::layout::{LayerKind, layers, views};
 
 /// `∂²G/∂x∂y = 1/(1+x²+y²)²`.
 pub fn front_antiderivative(x: f64, y: f64) -> f64 {
@@ -60,6 +63,34 @@ pub fn sensor_weights(kind: SensorKind, rd: u32) -> Vec<f64> {
     layers(kind).into_iter().flat_map(|layer| layer_weights(layer, rd)).collect()
 }
 
+/// Per texel of a sensor's main layers (layer, row, column, as [`sensor_weights`]): the unit direction
+/// through its centre in the sensor's frame (x along t, y along b, z along n), and in w the solid angle it
+/// covers (`area / |d|³` of its square on its view's plane at distance 1). The reduction looks the sky map
+/// up along it, averaged over that solid angle, where the texel sees no geometry.
+pub fn texel_directions(kind: SensorKind, rd: u32) -> Vec<Vec4> {
+    let frame = SensorFrame { origin: Vec3::ZERO, t: Vec3::X, b: Vec3::Y, n: Vec3::Z };
+    let views = views(kind);
+    let mut out = Vec::with_capacity(layers(kind).len() * (rd * rd) as usize);
+    for layer in 0..layers(kind).len() as u32 {
+        let in_layer: Vec<_> = views.iter().filter(|v| v.layer == layer).collect();
+        for row in 0..rd {
+            let ndc_y = (row as f32 + 0.5) * 2.0 / rd as f32 - 1.0;
+            for column in 0..rd {
+                let ndc_x = (column as f32 + 0.5) * 2.0 / rd as f32 - 1.0;
+                // A side pair's two views share the layer, each kept above the horizon: the texel is the
+                // one whose direction is.
+                let view =
+                    (in_layer.iter()).find(|v| frame.direction(v, ndc_x, ndc_y).z >= 0.0).unwrap_or(&in_layer[0]);
+                let s = (view.fov_deg.to_radians() * 0.5).tan();
+                let length2 = 1.0 + (ndc_x * s).powi(2) + (ndc_y * s).powi(2);
+                let area = (2.0 * s / rd as f32).powi(2);
+                out.push(frame.direction(view, ndc_x, ndc_y).extend(area / length2.powf(1.5)));
+            }
+        }
+    }
+    out
+}
+
 /// `Σ w` over a sensor, exact: π for a hemicube, `4·G(S, S)` for a frustum of half-width `S`.
 pub fn total(kind: SensorKind) -> f64 {
     match kind {
@@ -78,6 +109,25 @@ mod tests {
 
     fn sum(kind: SensorKind, rd: u32) -> f64 {
         sensor_weights(kind, rd).iter().sum()
+    }
+
+    /// Each texel's direction and solid angle agree with its weight (`w ≈ cosθ·dω`), the directions cover
+    /// the hemisphere once (`Σ dω ≈ 2π`), and every direction lies above the horizon.
+    #[test]
+    fn texel_directions_agree_with_the_weights_and_cover_the_hemisphere() {
+        for kind in [SensorKind::Hemicube, SensorKind::Frustum { fov_deg: 135.0 }] {
+            let rd = 32;
+            let (w, d) = (sensor_weights(kind, rd), texel_directions(kind, rd));
+            assert_eq!(w.len(), d.len());
+            for (w, d) in w.iter().zip(&d) {
+                assert!(d.z > 0.0 && (d.truncate().length() - 1.0).abs() < 1e-5, "{d}");
+                assert!((d.z as f64 * d.w as f64 / w - 1.0).abs() < 0.01, "{w} vs {}", d.z * d.w);
+            }
+            if kind == SensorKind::Hemicube {
+                let omega: f64 = d.iter().map(|d| d.w as f64).sum();
+                assert!((omega / (2.0 * PI) - 1.0).abs() < 1e-3, "{omega}");
+            }
+        }
     }
 
     #[test]

@@ -15,7 +15,7 @@
 //!               the light groups' exact light recomputed at the sample (donor.rs); where a group's light
 //!               is uneven around the pixel, its visibility there by shadow rays            (shadow.rs)
 //!  4. resolve   on the GPU after composition: the pixel is the mean of Le + Kd·R over its samples, the
-//!               background where a sample leaves the scene                (glsl/resolve.comp, resolve_cpu)
+//!               sky along its ray where a sample leaves the scene         (glsl/resolve.comp, resolve_cpu)
 //!  5. ends      then the pixels far darker than a neighbour on their surface, as sensed and resolved
 //!               (the light ends inside them: `light_ends`), planned and resolved the same way
 //! ```
@@ -155,9 +155,24 @@ pub fn plan(scene: &Scene, bvh: &Bvh, g: &GBufferData, flags: &[Flags]) -> Plan 
     plan
 }
 
+/// Gives each sample of `samples` (those of `plan`'s pixels `range`, [`SAMPLES`] each, in an image `width`
+/// wide) that leaves the scene the sky it sees, `sky(its image point)`, in its albedo, where the resolve
+/// reads it.
+pub fn carry_sky(
+    samples: &mut [GpuSubSample],
+    (plan, range): (&Plan, Range<usize>),
+    width: u32,
+    sky: impl Fn(Vec2) -> Vec3 + Sync,
+) {
+    samples.par_iter_mut().enumerate().filter(|(_, s)| s.position[3] == 0.0).for_each(|(s, record)| {
+        let at = plan.point(range.start + s / SAMPLES, s % SAMPLES, width);
+        record.albedo = sky(at).extend(0.0).to_array();
+    });
+}
+
 /// The resolve's CPU twin (`glsl/resolve.comp`): per supersampled pixel (`pixels`, each with [`SAMPLES`] of
-/// `samples`), the image: its exact emission plus `Kd·R` averaged over its samples (the background where
-/// one leaves the scene); and R averaged over those that met a surface (the radiance AOV); each with alpha
+/// `samples`), the image: its exact emission plus `Kd·R` averaged over its samples (the sky it carries in its
+/// albedo where one leaves the scene); and R averaged over those that met a surface (the radiance AOV); each with alpha
 /// the share that did (coverage).
 /// `composed`: every pixel's final R; `g`: the centres' G-buffer (the donors' positions); with `exact`,
 /// each light group's light is computed at the sample and at its donor (`lights`, sensors lifted by
@@ -167,7 +182,6 @@ pub fn resolve_cpu(
     composed: &[Vec4],
     g: &GBufferData,
     (lights, bias, exact): (&Lights, f32, bool),
-    background: Vec3,
 ) -> Vec<(Vec4, Vec4)> {
     let direct = |p: Vec4, n: Vec4, v: &[f32; MAX_GROUPS]| -> Vec3 {
         if p.w == 0.0 {
@@ -183,7 +197,7 @@ pub fn resolve_cpu(
             for s in pixel {
                 let position = Vec4::from(s.position);
                 if position.w == 0.0 {
-                    image += background;
+                    image += Vec4::from(s.albedo).truncate();
                     continue;
                 }
                 let d = s.donor as usize;

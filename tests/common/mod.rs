@@ -260,3 +260,31 @@ pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u3
         c
     })
 }
+
+/// Ground (4 × 4 at y = 0), a back wall, a side wall (1.5 high) and a pillar (a box 0.3 × 1.2 × 0.3 at the
+/// centre), all of albedo `albedo`, as `yard.obj` and `yard.mtl` in `dir`: an open scene lit from above.
+pub fn courtyard_mesh(dir: &Path, albedo: f32) {
+    let mut obj = String::from("mtllib yard.mtl\nusemtl stone\n");
+    let mut n = 0;
+    let mut quad = |obj: &mut String, name: &str, c: [Vec3; 4]| {
+        obj.push_str(&format!("g {name}\n"));
+        for p in c {
+            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        obj.push_str(&format!("f {} {} {} {}\n", n + 1, n + 2, n + 3, n + 4));
+        n += 4;
+    };
+    let v = Vec3::new;
+    quad(&mut obj, "ground", [v(-2.0, 0.0, 2.0), v(2.0, 0.0, 2.0), v(2.0, 0.0, -2.0), v(-2.0, 0.0, -2.0)]);
+    quad(&mut obj, "back", [v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 1.5, -2.0), v(-2.0, 1.5, -2.0)]);
+    quad(&mut obj, "side", [v(-2.0, 0.0, 2.0), v(-2.0, 0.0, -2.0), v(-2.0, 1.5, -2.0), v(-2.0, 1.5, 2.0)]);
+    // The pillar: four sides and a top, counter-clockwise from outside.
+    let (a, b, h) = (-0.15f32, 0.15f32, 1.2f32);
+    quad(&mut obj, "pillar", [v(a, 0.0, b), v(b, 0.0, b), v(b, h, b), v(a, h, b)]);
+    quad(&mut obj, "pillar", [v(b, 0.0, b), v(b, 0.0, a), v(b, h, a), v(b, h, b)]);
+    quad(&mut obj, "pillar", [v(b, 0.0, a), v(a, 0.0, a), v(a, h, a), v(b, h, a)]);
+    quad(&mut obj, "pillar", [v(a, 0.0, a), v(a, 0.0, b), v(a, h, b), v(a, h, a)]);
+    quad(&mut obj, "pillar", [v(a, h, b), v(b, h, b), v(b, h, a), v(a, h, a)]);
+    std::fs::write(dir.join("yard.obj"), obj).unwrap();
+    std::fs::write(dir.join("yard.mtl"), format!("newmtl stone\nKd {albedo} {albedo} {albedo}\n")).unwrap();
+}

@@ -77,14 +77,40 @@ pub enum MapLayout {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CkParams {
     pub epsilon: f32,
-    pub background: Vec3,
+    pub background: Background,
     /// Surfaces return the cache's values (`GpuScene::cache`) as they are now.
     pub cache: bool,
 }
 
+/// What a sensor texel that sees no geometry holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Background {
+    /// This radiance: the constant sky (black for the passes that must not see the sky).
+    Constant(Vec3),
+    /// The scene's sky map along the texel's direction: the maps mark such texels with alpha −1 and the
+    /// reduction looks the map up (`glsl/reduce.comp`).
+    SkyMap,
+}
+
+impl Background {
+    pub const BLACK: Self = Self::Constant(Vec3::ZERO);
+
+    pub fn is_black(&self) -> bool {
+        *self == Self::BLACK
+    }
+
+    /// The maps' clear colour: the radiance and alpha 0 (no emitter's group), or the sky map's mark.
+    fn clear_colour(&self) -> [f32; 4] {
+        match self {
+            Self::Constant(radiance) => radiance.extend(0.0).to_array(),
+            Self::SkyMap => [0.0, 0.0, 0.0, -1.0],
+        }
+    }
+}
+
 impl CkParams {
     /// The paper's `Kd·ε` and `background`, no cache.
-    pub fn epsilon(epsilon: f32, background: Vec3) -> Self {
+    pub fn epsilon(epsilon: f32, background: Background) -> Self {
         Self { epsilon, background, cache: false }
     }
 
@@ -317,10 +343,10 @@ impl SlotMaps {
         self.layer_framebuffer(pipeline, (0, layers), layers)
     }
 
-    /// The background's radiance, and alpha 0: no emitter's group (see `glsl/sensor.frag`).
-    fn clears(background: Vec3) -> [vk::ClearValue; 2] {
+    /// What a texel that sees no geometry holds (see `glsl/sensor.frag`), and the far depth.
+    fn clears(background: Background) -> [vk::ClearValue; 2] {
         [
-            vk::ClearValue { color: vk::ClearColorValue { float32: background.extend(0.0).to_array() } },
+            vk::ClearValue { color: vk::ClearColorValue { float32: background.clear_colour() } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } },
         ]
     }
