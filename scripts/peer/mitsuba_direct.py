@@ -55,7 +55,11 @@ How each convention is matched
   floor), so there is no peer for a cut-out's shadow here.
 * Sun and sky: a scene's `[sun]` becomes the same disc sensorlight draws (`src/scene/sun.rs`: a 32-gon of
   the round disc's area, 10⁴ diagonals of the mesh's bounds away, radiance E / (A / (D² + A/π))), an
-  `area` emitter; `[render] background` a `constant` emitter.
+  `area` emitter; `[render] background` a `constant` emitter; a `[sky]` map an `envmap` emitter of the
+  same radiance. Mitsuba reads a map's columns as sensorlight does (texel centres, u wrapping) but its
+  rows from pole to pole (row j at v = j/(H−1)) where sensorlight's are texel centres (v = (j+½)/H):
+  the script hands Mitsuba the map resampled to 2H + 1 rows at v = j/2H, on which Mitsuba's linear
+  interpolation is sensorlight's exactly (every kink of sensorlight's bilinear function is a row).
 * Emitters: a material with any Ke component > 0 gets an `area` emitter of radiance Ke (linear RGB).
   Mitsuba's area emitter is one-sided: it emits only towards the side its geometric normal points to,
   i.e. the counter-clockwise front, sensorlight's convention.
@@ -338,6 +342,8 @@ class SceneSpec:
     background: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     # The [sun] table: direction, irradiance (RGB), angular diameter in degrees.
     sun: tuple[list[float], list[float], float] | None = None
+    # The [sky] table: the map's path and strength.
+    sky: tuple[Path, float] | None = None
 
 
 def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
@@ -368,8 +374,31 @@ def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
         irradiance = table.get("irradiance", math.pi)
         irradiance = [float(irradiance)] * 3 if isinstance(irradiance, (int, float)) else [float(x) for x in irradiance]
         sun = ([float(x) for x in table["direction"]], irradiance, float(table.get("angular_diameter_deg", 0.53)))
+    sky = None
+    if "sky" in doc:
+        sky = (path.parent / doc["sky"]["map"], float(doc["sky"].get("strength", 1.0)))
     mesh = load_obj(path.parent / mesh_name)
-    return SceneSpec(path, mesh, eye, target, up, vfov, w, h, background, sun)
+    return SceneSpec(path, mesh, eye, target, up, vfov, w, h, background, sun, sky)
+
+
+def sky_envmap(path: Path, strength: float) -> dict:
+    """An `envmap` emitter whose radiance is sensorlight's sky map's (`src/scene/sky.rs`): the map's rows
+    resampled to 2H + 1 rows at v = j / 2H (module docs)."""
+    import mitsuba as mi
+    import numpy as np
+
+    try:
+        texels = np.array(mi.Bitmap(str(path)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False))
+    except Exception as e:  # Mitsuba raises RuntimeError for unreadable files
+        raise SceneError(f"sky map {path}: {e}") from None
+    texels = texels.astype(np.float64) * strength
+    h = texels.shape[0]
+    v = np.arange(2 * h + 1) / (2 * h)
+    y = np.clip(v * h - 0.5, 0.0, h - 1)
+    y0 = np.floor(y).astype(int)
+    f = (y - y0)[:, None, None]
+    rows = texels[y0] * (1 - f) + texels[np.minimum(y0 + 1, h - 1)] * f
+    return {"type": "envmap", "bitmap": mi.Bitmap(rows.astype(np.float32))}
 
 
 def sun_disc(direction, irradiance, diameter_deg, lo, hi):
@@ -501,7 +530,9 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
         params["faces"] = type(params["faces"])(np.arange(len(positions), dtype=np.uint32))
         params.update()
         shapes["sun"] = shape
-    if any(b > 0 for b in spec.background):
+    if spec.sky is not None:
+        shapes["sky"] = sky_envmap(*spec.sky)
+    elif any(b > 0 for b in spec.background):
         shapes["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": spec.background}}
     eye = np.asarray(spec.eye, dtype=np.float64)
     far = float(np.max(np.linalg.norm(np.stack([lo, hi]) - eye, axis=1)) * 4.0 + 1.0)

@@ -64,6 +64,10 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
              of {n} emitter triangles each"
         ),
     };
+    let strategies = match &scene.sky {
+        Some(sky) if sky.can_sample() => format!("{strategies}, + a direction drawn from the sky map by its luminance"),
+        _ => strategies,
+    };
     say!(
         "reference: {}x{}, {}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
