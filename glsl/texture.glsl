@@ -29,10 +29,8 @@ uint level_offset(GpuTexture t, uint level, out ivec2 size) {
     return offset;
 }
 
-// Bilinear at `uv` (repeating) within one level; texel centres at half-integers.
-vec4 bilinear(GpuTexture t, uint level, vec2 uv) {
-    ivec2 size;
-    uint offset = level_offset(t, level, size);
+// Bilinear at `uv` (repeating) within the level at `offset` of `size`; texel centres at half-integers.
+vec4 bilinear(uint offset, ivec2 size, vec2 uv) {
     vec2 xy = (uv - floor(uv)) * vec2(size) - 0.5;
     vec2 base = floor(xy);
     vec2 f = xy - base;
@@ -48,12 +46,23 @@ vec4 bilinear(GpuTexture t, uint level, vec2 uv) {
 
 // Linear colour and alpha of texture `index` at `uv`, on level of detail `lod` (blending the two levels
 // around it), as `Texture::sample`.
+//
+// The next level's offset is one step on from the first's, not a second walk from level 0: in the reduction
+// lavapipe returned wrong texels from two such walks whose lengths differed between neighbouring invocations
+// (glsl/sky.glsl, which reads its levels alike). The textured room renders the same either way here.
 vec4 sample_texture(uint index, vec2 uv, float lod) {
     GpuTexture t = texture_table[index];
     lod = clamp(lod, 0.0, float(t.levels - 1u));
     float lower = floor(lod);
-    vec4 a = bilinear(t, uint(lower), uv);
-    return lod == lower ? a : mix(a, bilinear(t, uint(lower) + 1u, uv), lod - lower);
+    ivec2 size;
+    uint offset = level_offset(t, uint(lower), size);
+    vec4 a = bilinear(offset, size, uv);
+    if (lod == lower) {
+        return a;
+    }
+    offset += uint(size.x * size.y);
+    size = max(size / 2, ivec2(1));
+    return mix(a, bilinear(offset, size, uv), lod - lower);
 }
 
 // The level of detail on which a step of `dx` or `dy` in uv spans one texel (Vulkan's scale factor ρ, the
