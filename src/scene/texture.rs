@@ -63,6 +63,10 @@ impl Texture {
         let unreadable = || format!("texture {name} is not a readable image");
         let mut reader =
             image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().with_context(unreadable)?;
+        // TGA has no signature to guess it by: its name's extension says it.
+        if reader.format().is_none() {
+            reader.set_format(image::ImageFormat::from_path(name).with_context(unreadable)?);
+        }
         // A header claiming a huge image is refused before anything is allocated for it.
         let mut limits = image::Limits::default();
         (limits.max_image_width, limits.max_image_height) = (Some(MAX_SIDE), Some(MAX_SIDE));
@@ -191,6 +195,18 @@ mod tests {
             "t",
             Level { width, height, texels: texels.iter().map(|&t| u32::from_le_bytes(t)).collect() },
         )
+    }
+
+    /// TGA has no signature: it is read by its name's extension (Crytek Sponza's textures are TGA).
+    #[test]
+    fn a_tga_is_read_by_its_extension() {
+        let image = image::RgbaImage::from_fn(2, 2, |x, y| image::Rgba([x as u8 * 200, y as u8 * 100, 7, 255]));
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write_to(&mut bytes, image::ImageFormat::Tga).unwrap();
+        let t = Texture::decode(bytes.get_ref(), "bricks.tga").unwrap();
+        assert_eq!(t.levels[0].texels[1], u32::from_le_bytes([200, 0, 7, 255]));
+        let e = Texture::decode(bytes.get_ref(), "bricks.data").unwrap_err();
+        assert!(format!("{e:#}").contains("bricks.data is not a readable image"), "{e:#}");
     }
 
     #[test]
