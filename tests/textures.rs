@@ -427,3 +427,23 @@ fn sensor_maps_cut_out_alike_from_clusters_and_from_the_soup() {
     let (through, shaded) = (on_floor(&soup), on_floor(&whole));
     assert!(through > 1.02 * shaded, "R on the floor: {through} through the holes, {shaded} under the whole card");
 }
+
+/// A textured material's `Kd` of 1 (the texture's colour as it is, as real assets write it) reflects its
+/// texture's mean, under global illumination's cap: no warning. Scaled past the cap, it is said, with
+/// what it reflects.
+#[test]
+fn a_textured_kd_of_one_is_not_too_bright() {
+    let dir = common::scratch("textures-albedo-warning");
+    textured_room(&dir, (16, 16));
+    let mtl = std::fs::read_to_string(dir.join("room.mtl")).unwrap();
+    let white = mtl.replace("newmtl checker\n", "newmtl checker\nKd 1 1 1\n").replace("Kd 0.9 0.9 0.9", "Kd 1 1 1");
+    std::fs::write(dir.join("room.mtl"), white).unwrap();
+    let scene = Scene::load(&dir.join("room.toml")).unwrap();
+    assert_eq!(sensorlight::gi::albedo_warnings(&scene.mesh), Vec::<String>::new());
+    let bright = mtl.replace("Kd 0.9 0.9 0.9", "Kd 3 3 3");
+    std::fs::write(dir.join("room.mtl"), bright).unwrap();
+    let scene = Scene::load(&dir.join("room.toml")).unwrap();
+    let warnings = sensorlight::gi::albedo_warnings(&scene.mesh);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("'halves' reflects (Kd × its texture's mean)"), "{warnings:?}");
+}

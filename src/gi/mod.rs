@@ -29,19 +29,23 @@ pub use grid::Grid;
 /// diverges). Materials above it are clamped for the cache only, and said so once ([`albedo_warnings`]).
 pub const MAX_ALBEDO: f32 = 0.98;
 
-/// What global illumination says of `mesh` before it renders: each material in use that reflects more than
-/// [`MAX_ALBEDO`], once.
+/// What global illumination says of `mesh` before it renders: each material in use whose surfaces reflect
+/// more than [`MAX_ALBEDO`] (`Kd`, times its texture's mean where it has one: `Mesh::surface_albedo`), once.
+/// A textured material's `Kd` of 1 (the usual way to say "the texture's colour") is not such a one.
 pub fn albedo_warnings(mesh: &Mesh) -> Vec<String> {
-    let mut used: Vec<usize> = mesh.surfaces.iter().map(|s| s.material).collect();
-    used.sort_unstable();
-    used.dedup();
-    (used.into_iter().map(|m| &mesh.materials[m]))
-        .filter(|m| m.kd.max_element() > MAX_ALBEDO)
-        .map(|m| {
+    let mut brightest: Vec<Option<Vec3>> = vec![None; mesh.materials.len()];
+    for id in 1..=mesh.surfaces.len() as SurfaceId {
+        let (m, albedo) = (mesh.surfaces[id as usize - 1].material, mesh.surface_albedo(id));
+        brightest[m] = Some(brightest[m].map_or(albedo, |b| b.max(albedo)));
+    }
+    (mesh.materials.iter().zip(brightest))
+        .filter_map(|(m, albedo)| albedo.filter(|a| a.max_element() > MAX_ALBEDO).map(|a| (m, a)))
+        .map(|(m, a)| {
+            let what = if a == m.kd { "has Kd".to_owned() } else { "reflects (Kd × its texture's mean)".to_owned() };
             format!(
-                "material '{}' has Kd {} {} {}: global illumination's bounces use at most {MAX_ALBEDO} per channel \
+                "material '{}' {what} {} {} {}: global illumination's bounces use at most {MAX_ALBEDO} per channel \
                  (at 1 a closed room would reflect its light forever)",
-                m.name, m.kd.x, m.kd.y, m.kd.z
+                m.name, a.x, a.y, a.z
             )
         })
         .collect()
