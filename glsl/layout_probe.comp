@@ -32,6 +32,7 @@ layout(std430, set = 0, binding = 23) buffer SubSamples { GpuSubSample sub_sampl
 layout(std430, set = 0, binding = 24) buffer ResolvePushes { ResolvePush resolve_pushes[]; };
 layout(std430, set = 0, binding = 25) buffer SupersampledPixels { GpuSupersampledPixel supersampled_pixels[]; };
 layout(std430, set = 0, binding = 26) buffer Textures { GpuTexture textures[]; };
+layout(std430, set = 0, binding = 27) buffer Skies { GpuSky skies[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -62,4 +63,5 @@ void main() {
     resolve_pushes[1] = resolve_pushes[0];
     supersampled_pixels[1] = supersampled_pixels[0];
     textures[1] = textures[0];
+    skies[1] = skies[0];
 }

@@ -1,16 +1,19 @@
 // The sky map as the reduction reads it: the GPU twin of src/scene/sky.rs (`SkyMap::radiance_lod`), from the
 // same levels (linear RGB, level 0 first, each level row by row from the zenith). The includer binds the
-// map's table entry (a GpuTexture: levels = 0 for no map) and its texels at SKY_BINDING and SKY_BINDING + 1
-// of set 0.
+// map's description (a GpuSky: levels = 0 for no map) and its texels at SKY_BINDING and SKY_BINDING + 1 of
+// set 0.
 #ifndef SKY_GLSL
 #define SKY_GLSL
 #include "types.glsl"
 
-layout(std430, set = 0, binding = SKY_BINDING) readonly buffer SkyTable { GpuTexture sky_map; };
+layout(std430, set = 0, binding = SKY_BINDING) readonly buffer SkyTable { GpuSky sky_map; };
 layout(std430, set = 0, binding = SKY_BINDING + 1) readonly buffer SkyTexels { vec4 sky_texels[]; };
 
-// Texture coordinates of the unit direction d: u = atan2(x, -z) / 2pi wrapped, v = acos(y) / pi.
+// Texture coordinates of the unit direction d, the map turned about +y: u = atan2(x, -z) / 2pi wrapped,
+// v = acos(y) / pi of d turned back.
 vec2 sky_uv(vec3 d) {
+    vec2 r = sky_map.rotation.xy;
+    d = vec3(r.x * d.x - r.y * d.z, d.y, r.y * d.x + r.x * d.z);
     float u = atan(d.x, -d.z) / (2.0 * PI);
     return vec2(u - floor(u), acos(clamp(d.y, -1.0, 1.0)) / PI);
 }

@@ -156,6 +156,15 @@ struct ComposePush {
     uint sky;         // 1: a pixel without a surface shows its own sky (sky_pixels)
 };
 
+// The sky map (src/gpu_types.rs GpuSky): levels = 0 for none.
+struct GpuSky {
+    uint width;
+    uint height;
+    uint levels;
+    uint _pad;
+    vec4 rotation;  // cos, sin of its turn about +y
+};
+
 // Surface id of pixels where no surface is seen (src/scene/mod.rs NO_SURFACE).
 const uint NO_SURFACE = 0u;
 

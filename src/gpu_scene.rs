@@ -13,7 +13,7 @@ use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
 use crate::gi::RadianceCache;
 use crate::gpu_types::{
     CLUSTER_EMITTER, EMITTER_CHUNK, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode, GpuEmitter,
-    GpuEmitterChunk, GpuLightGroup, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
+    GpuEmitterChunk, GpuLightGroup, GpuSky, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
 use crate::scene::{Mesh, Scene, SkyMap, Texture};
@@ -30,7 +30,7 @@ pub struct GpuScene {
     /// The colour textures: a `GpuTexture` each, and every level's packed texels (`scene::texture`).
     pub textures: Arc<Buffer>,
     pub texels: Arc<Buffer>,
-    /// The sky map: its `GpuTexture` (levels 0: no map, and one texel no shader reads) and its levels'
+    /// The sky map: its `GpuSky` (levels 0: no map, and one texel no shader reads) and its levels'
     /// linear texels (`vec4`, `scene::sky`).
     pub sky: Arc<Buffer>,
     pub sky_texels: Arc<Buffer>,
@@ -354,12 +354,15 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<u32>, Vec<GpuTexture>) {
     (texels, table)
 }
 
-/// The sky map's table entry and every level's texels, level 0 first (`scene::sky`); without a map, levels
+/// The sky map's description and every level's texels, level 0 first (`scene::sky`); without a map, levels
 /// 0 and one black texel.
-pub fn gpu_sky(sky: Option<&SkyMap>) -> (GpuTexture, Vec<Vec4>) {
-    let Some(sky) = sky else { return (GpuTexture::default(), vec![Vec4::ZERO]) };
+pub fn gpu_sky(sky: Option<&SkyMap>) -> (GpuSky, Vec<Vec4>) {
+    let Some(sky) = sky else { return (GpuSky::default(), vec![Vec4::ZERO]) };
     let texels = sky.levels.iter().flat_map(|l| l.texels.iter().map(|t| t.extend(0.0))).collect();
-    (GpuTexture { offset: 0, width: sky.width(), height: sky.height(), levels: sky.levels.len() as u32 }, texels)
+    let (sin, cos) = sky.rotation_deg.to_radians().sin_cos();
+    let levels = sky.levels.len() as u32;
+    let rotation = Vec4::new(cos, sin, 0.0, 0.0);
+    (GpuSky { width: sky.width(), height: sky.height(), levels, _pad: 0, rotation }, texels)
 }
 
 #[cfg(test)]

@@ -48,6 +48,19 @@ pub struct GpuTexture {
     pub levels: u32,
 }
 
+/// The sky map as the reduction reads it (`glsl/sky.glsl`): its level 0's size, its levels (0: no map) and
+/// its turn about +y. Its texels lie in a buffer of their own, level 0 first (`scene::sky`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSky {
+    pub width: u32,
+    pub height: u32,
+    pub levels: u32,
+    pub _pad: u32,
+    /// cos and sin of the map's turn about +y (`SkyMap::rotation_deg`); z, w unused.
+    pub rotation: Vec4,
+}
+
 /// Push constants of the G-buffer pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

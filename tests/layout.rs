@@ -7,8 +7,8 @@ use std::mem::offset_of;
 use sensorlight::gpu_types::{
     ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
     GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
-    GpuSensorResult, GpuSensorView, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuTexture, GpuZoom, ImagePush,
-    ReducePush, ResolvePush, SensorPush,
+    GpuSensorResult, GpuSensorView, GpuSky, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuTexture, GpuZoom,
+    ImagePush, ReducePush, ResolvePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -167,6 +167,7 @@ fn shared_structs_match_glsl() {
         (25, "GpuSupersampledPixel", rust_layout!(GpuSupersampledPixel: emission, pixel, _pad)),
         (24, "ResolvePush", rust_layout!(ResolvePush: width, count, samples, groups, bias, exact, _pad)),
         (26, "GpuTexture", rust_layout!(GpuTexture: offset, width, height, levels)),
+        (27, "GpuSky", rust_layout!(GpuSky: width, height, levels, _pad, rotation)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -342,8 +342,8 @@ class SceneSpec:
     background: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     # The [sun] table: direction, irradiance (RGB), angular diameter in degrees.
     sun: tuple[list[float], list[float], float] | None = None
-    # The [sky] table: the map's path and strength.
-    sky: tuple[Path, float] | None = None
+    # The [sky] table: the map's path, strength and turn about +y in degrees.
+    sky: tuple[Path, float, float] | None = None
 
 
 def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
@@ -376,12 +376,13 @@ def load_scene(path: Path, width: int | None, height: int | None) -> SceneSpec:
         sun = ([float(x) for x in table["direction"]], irradiance, float(table.get("angular_diameter_deg", 0.53)))
     sky = None
     if "sky" in doc:
-        sky = (path.parent / doc["sky"]["map"], float(doc["sky"].get("strength", 1.0)))
+        table = doc["sky"]
+        sky = (path.parent / table["map"], float(table.get("strength", 1.0)), float(table.get("rotation_deg", 0.0)))
     mesh = load_obj(path.parent / mesh_name)
     return SceneSpec(path, mesh, eye, target, up, vfov, w, h, background, sun, sky)
 
 
-def sky_envmap(path: Path, strength: float) -> dict:
+def sky_envmap(path: Path, strength: float, rotation_deg: float) -> dict:
     """An `envmap` emitter whose radiance is sensorlight's sky map's (`src/scene/sky.rs`): the map's rows
     resampled to 2H + 1 rows at v = j / 2H (module docs)."""
     import mitsuba as mi
@@ -398,7 +399,8 @@ def sky_envmap(path: Path, strength: float) -> dict:
     y0 = np.floor(y).astype(int)
     f = (y - y0)[:, None, None]
     rows = texels[y0] * (1 - f) + texels[np.minimum(y0 + 1, h - 1)] * f
-    return {"type": "envmap", "bitmap": mi.Bitmap(rows.astype(np.float32))}
+    to_world = mi.ScalarTransform4f().rotate([0, 1, 0], rotation_deg)
+    return {"type": "envmap", "bitmap": mi.Bitmap(rows.astype(np.float32)), "to_world": to_world}
 
 
 def sun_disc(direction, irradiance, diameter_deg, lo, hi):

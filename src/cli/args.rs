@@ -113,6 +113,10 @@ pub struct LightFlags {
     /// Multiply the sky map by this [default: the scene's, else 1]
     #[arg(long, value_name = "K")]
     pub sky_strength: Option<f32>,
+    /// Turn the sky map about +y by this many degrees, counter-clockwise seen from above [default: the
+    /// scene's, else 0]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub sky_rotation: Option<f32>,
 }
 
 impl LightFlags {
@@ -140,16 +144,19 @@ impl LightFlags {
         if let Some(sun) = self.sun(scene.sun.as_ref())? {
             scene.set_sun(sun);
         }
+        let changes = self.sky_strength.is_some() || self.sky_rotation.is_some();
         let path = match (&self.sky, &scene.sky) {
             (Some(path), _) => path.clone(),
-            (None, Some(current)) if self.sky_strength.is_some() => PathBuf::from(&current.name),
-            (None, None) if self.sky_strength.is_some() => {
-                anyhow::bail!("--sky-strength needs a sky map: give one with --sky FILE")
+            (None, Some(current)) if changes => PathBuf::from(&current.name),
+            (None, None) if changes => {
+                anyhow::bail!("--sky-strength and --sky-rotation need a sky map: give one with --sky FILE")
             }
             (None, _) => return Ok(()),
         };
         let strength = self.sky_strength.or(scene.sky.as_ref().map(|s| s.strength)).unwrap_or(1.0);
-        scene.set_sky(SkyMap::load(&path, strength).map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?);
+        let rotation = self.sky_rotation.or(scene.sky.as_ref().map(|s| s.rotation_deg)).unwrap_or(0.0);
+        let sky = SkyMap::load(&path, strength).and_then(|sky| sky.turned(rotation));
+        scene.set_sky(sky.map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?);
         Ok(())
     }
 }

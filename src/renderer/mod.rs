@@ -524,7 +524,13 @@ impl Renderer {
         // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
         // cache's pieces are halved.
         let bvh = Bvh::of_mesh(&scene.mesh);
-        let light_points = (layout.groups > 0).then(|| hints::light_points(&lights));
+        let mut light_points = (layout.groups > 0).then(|| hints::light_points(&lights));
+        // A sky map's bright patches too: its shadows split quads as the lights' do (the shares, by group,
+        // ignore these points).
+        if let Some(sky) = &scene.sky {
+            let points = light_points.get_or_insert_with(Vec::new);
+            points.extend(hints::sky_points(sky, &scene.mesh.bounds, points.len()));
+        }
         let shadow_points = (layout.groups > 0).then(|| ShadowPoints::new(&lights));
         if let Some(c) = config.cache {
             check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;

@@ -17,6 +17,7 @@
 //! [sky]                         # optional: an environment map (scene::sky) in place of the background
 //! map = "sky.exr"               # equirectangular, linear radiance (OpenEXR or Radiance HDR), +y up
 //! strength = 1.0                # its texels are multiplied by this (default 1)
+//! rotation_deg = 0              # turned about +y, counter-clockwise seen from above (default 0)
 //! [render]                      # optional; every key is also a CLI flag, which wins
 //! sensor = "hemicube"           # or "frustum"
 //! ```
@@ -71,6 +72,7 @@ pub struct SkySection {
     /// The map, relative to the TOML file.
     pub map: PathBuf,
     pub strength: Option<f32>,
+    pub rotation_deg: Option<f32>,
 }
 
 /// A colour written as one number (grey) or three.

@@ -430,6 +430,7 @@ impl Scene {
             Some(s) => {
                 let map = file.relative_path(path, &s.map);
                 let sky = SkyMap::load(&map, s.strength.unwrap_or(1.0))
+                    .and_then(|sky| sky.turned(s.rotation_deg.unwrap_or(0.0)))
                     .with_context(|| format!("{}: [sky]", path.display()))?;
                 Some(Arc::new(sky))
             }
@@ -646,6 +647,7 @@ impl Scene {
             let map = map.to_str().with_context(|| format!("{}: not UTF-8", map.display()))?;
             table.insert("map".into(), toml::Value::String(map.to_owned()));
             table.insert("strength".into(), num(sky.strength));
+            table.insert("rotation_deg".into(), num(sky.rotation_deg));
             doc.insert("sky".into(), toml::Value::Table(table));
         }
         if !render.is_empty() {

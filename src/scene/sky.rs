@@ -18,6 +18,9 @@
 //! whose texels each cover a solid angle many map texels wide: they read the level whose texels are about as
 //! large ([`SkyMap::lod`]).
 //!
+//! `rotation_deg` turns the map about +y (counter-clockwise seen from above, as Mitsuba's
+//! `rotate(y, angle)`): what the map shows at direction m appears at `R_y(angle)·m`.
+//!
 //! The oracle samples directions in proportion to the map's luminance ([`SkyMap::sample`]): a bright sun in
 //! the map is found by its own samples, not by luck.
 
@@ -50,6 +53,10 @@ pub struct SkyMap {
     pub name: String,
     /// The factor its texels were multiplied by (`[sky] strength`, `--sky-strength`).
     pub strength: f32,
+    /// Its turn about +y in degrees (`[sky] rotation_deg`, `--sky-rotation`); `turn` holds its sine and
+    /// cosine.
+    pub rotation_deg: f32,
+    turn: (f32, f32),
     /// Level 0 first, each half the previous (rounded down, at least 1) down to 1 × 1.
     pub levels: Vec<SkyLevel>,
     /// Cumulative sums for sampling: each row's total (`marginal`), and each row's texels (`conditional`).
@@ -88,7 +95,31 @@ impl SkyMap {
             levels.push(downsample(last));
         }
         let (marginal, conditional) = distribution(&levels[0]);
-        Ok(Self { name: name.to_owned(), strength, levels, marginal, conditional })
+        Ok(Self { name: name.to_owned(), strength, rotation_deg: 0.0, turn: (0.0, 1.0), levels, marginal, conditional })
+    }
+
+    /// The map turned about +y by `degrees` (module docs).
+    pub fn turned(mut self, degrees: f32) -> Result<Self> {
+        ensure!(
+            degrees.is_finite(),
+            "sky map {}: rotation must be a finite number of degrees, got {degrees}",
+            self.name
+        );
+        self.rotation_deg = degrees;
+        self.turn = degrees.to_radians().sin_cos();
+        Ok(self)
+    }
+
+    /// The map's direction for the world direction `d`: `R_y(−angle)·d`.
+    fn to_map(&self, d: Vec3) -> Vec3 {
+        let (sin, cos) = self.turn;
+        Vec3::new(cos * d.x - sin * d.z, d.y, sin * d.x + cos * d.z)
+    }
+
+    /// The world direction for the map's direction `m`: `R_y(angle)·m`.
+    fn to_world(&self, m: Vec3) -> Vec3 {
+        let (sin, cos) = self.turn;
+        Vec3::new(cos * m.x + sin * m.z, m.y, -sin * m.x + cos * m.z)
     }
 
     pub fn width(&self) -> u32 {
@@ -111,7 +142,7 @@ impl SkyMap {
 
     /// The radiance arriving from direction `d` (unit), bilinear on level 0.
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        bilinear(&self.levels[0], direction_to_uv(d))
+        bilinear(&self.levels[0], direction_to_uv(self.to_map(d)))
     }
 
     /// The radiance from `d` on level of detail `lod` (blending the two levels around it), as
@@ -120,7 +151,7 @@ impl SkyMap {
         let top = (self.levels.len() - 1) as f32;
         let lod = if lod.is_finite() { lod.clamp(0.0, top) } else { 0.0 };
         let lower = lod.floor();
-        let uv = direction_to_uv(d);
+        let uv = direction_to_uv(self.to_map(d));
         let a = bilinear(&self.levels[lower as usize], uv);
         if lod == lower { a } else { a.lerp(bilinear(&self.levels[lower as usize + 1], uv), lod - lower) }
     }
@@ -169,7 +200,7 @@ impl SkyMap {
         let cdf = &self.conditional[row * w..(row + 1) * w];
         let (column, fx) = pick(cdf, u.x * cdf[w - 1]);
         let uv = Vec2::new((column as f32 + fx) / w as f32, (row as f32 + fy) / h as f32);
-        let d = uv_to_direction(uv);
+        let d = self.to_world(uv_to_direction(uv));
         let pdf = self.pdf(d);
         (pdf > 0.0).then_some((d, pdf))
     }
@@ -179,6 +210,7 @@ impl SkyMap {
     pub fn pdf(&self, d: Vec3) -> f32 {
         let Some(&total) = self.marginal.last().filter(|&&t| t > 0.0) else { return 0.0 };
         let (w, h) = (self.width() as usize, self.height() as usize);
+        let d = self.to_map(d);
         let uv = direction_to_uv(d);
         let column = ((uv.x * w as f32) as usize).min(w - 1);
         let row = ((uv.y * h as f32) as usize).min(h - 1);
@@ -398,6 +430,27 @@ mod tests {
             }
         }
         assert!((estimate.x / exact.x - 1.0).abs() < 0.01, "{estimate} vs {exact}");
+    }
+
+    /// Turned by 90°, what the map shows towards −z appears towards −x (R_y(90°) takes −z to −x), and
+    /// samples and densities turn with it.
+    #[test]
+    fn a_turned_map_turns_its_radiance_and_its_samples() {
+        let blob = -Vec3::Z;
+        let unturned = map(64, 32, |d| Vec3::splat(0.1 + 50.0 * d.dot(blob).max(0.0).powi(40)));
+        let sky = unturned.clone().turned(90.0).unwrap();
+        let (peak, turned) = (unturned.radiance(-Vec3::Z), sky.radiance(-Vec3::X));
+        assert!(peak.x > 40.0 && (turned - peak).abs().max_element() < 1e-3 * peak.x, "{turned} vs {peak}");
+        assert!(sky.radiance(-Vec3::Z).x < 0.2);
+        let mut towards = 0;
+        for k in 0..256 {
+            let u = Vec2::new((k as f32 + 0.5) / 256.0, ((k * 97) % 256) as f32 / 256.0);
+            let (d, pdf) = sky.sample(u).unwrap();
+            assert!((pdf - sky.pdf(d)).abs() <= 1e-3 * pdf);
+            towards += (d.dot(-Vec3::X) > 0.7) as u32;
+        }
+        assert!(towards > 200, "{towards} of 256 samples towards the turned blob");
+        assert!(map(4, 2, |_| Vec3::ONE).turned(f32::NAN).is_err());
     }
 
     #[test]

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::gbuffer::GBufferData;
 use crate::light::groups::{LightGroup, Lights};
 use crate::scene::bvh::Bvh;
-use crate::scene::{NO_SURFACE, Ray, stratified_point, triangle_area};
+use crate::scene::{Aabb, NO_SURFACE, Ray, SkyMap, stratified_point, triangle_area};
 
 /// Points a group is probed at, at most.
 pub const POINTS_PER_GROUP: usize = 16;
@@ -57,6 +57,24 @@ pub fn group_points(lights: &Lights, group: &LightGroup, n: usize) -> Vec<(Light
 
 fn points_per_group(lights: &Lights) -> usize {
     (MAX_POINTS / lights.groups.len().max(1)).min(POINTS_PER_GROUP)
+}
+
+/// Points standing for a sky map in the hints, after the groups' (up to [`MAX_POINTS`] in all, at most
+/// [`POINTS_PER_GROUP`]): directions drawn by the map's luminance (`SkyMap::sample` of a stratified set), each
+/// as a point 10⁴ diagonals of `bounds` away from its centre (as far as the sun's disc) facing the scene. A
+/// bright patch of sky gets most of them, so a quad across its shadow is split as one across an emitter's
+/// shadow is. None for a black map.
+pub fn sky_points(sky: &SkyMap, bounds: &Aabb, taken: usize) -> Vec<LightPoint> {
+    let n = MAX_POINTS.saturating_sub(taken).min(POINTS_PER_GROUP);
+    let distance = 1e4 * bounds.diagonal().max(f32::MIN_POSITIVE);
+    (0..n)
+        .filter_map(|k| {
+            // A rank-1 lattice (Fibonacci-like): even over the square for any n.
+            let u = glam::Vec2::new((k as f32 + 0.5) / n as f32, (k as f32 * 0.618_034).fract());
+            let (d, _) = sky.sample(u)?;
+            Some(LightPoint { position: bounds.center() + d * distance, normal: -d })
+        })
+        .collect()
 }
 
 /// How many of [`light_points`] each light group has, in order (0 for a group of no area).
