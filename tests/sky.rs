@@ -102,6 +102,25 @@ fn a_courtyard_under_a_patchy_sky_within_two_percent_of_the_oracle() {
     assert!(on.interior.own_error.unwrap() <= 0.02, "interior {:?}", on.interior);
 }
 
+/// The same courtyard, unturned, at the default global illumination (the radiance cache senses the map in
+/// its own pass) against the path tracer over pixel squares: within 2 % over the whole image and inside.
+#[test]
+fn a_courtyard_under_a_sky_map_with_global_illumination_within_two_percent_of_the_path_tracer() {
+    let dir = common::scratch("sky-gi");
+    common::courtyard_mesh(&dir, 0.6);
+    write_sky(&dir.join("sky.exr"), (128, 64), patchy);
+    std::fs::write(
+        dir.join("yard.toml"),
+        "mesh = \"yard.obj\"\n[camera]\neye = [1.2, 2.0, 3.4]\ntarget = [-0.3, 0.6, -0.5]\nvfov_deg = 50\n\
+         [image]\nwidth = 96\nheight = 72\n[sky]\nmap = \"sky.exr\"\n",
+    )
+    .unwrap();
+    let scene = Scene::load(&dir.join("yard.toml")).unwrap();
+    let [on, _] = common::against_the_area_oracle_with(&scene, Overrides::default(), 1024);
+    assert!(on.whole.own_error.unwrap() <= 0.02, "whole image {:?}", on.whole);
+    assert!(on.interior.own_error.unwrap() <= 0.02, "interior {:?}", on.interior);
+}
+
 /// A pixel that shows no surface shows the sky map over its square (the mean of 8 × 8 points), with alpha
 /// 0; `--aa off`, along its centre's ray.
 #[test]

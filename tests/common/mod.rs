@@ -224,7 +224,8 @@ pub fn against_the_area_oracle(scene: &Scene, epsilon: f32, samples: u32) -> [Co
     against_the_area_oracle_with(scene, Overrides { epsilon: Some(epsilon), ..Default::default() }, samples)
 }
 
-/// [`against_the_area_oracle`] with the parameters `flags` set (e.g. a background), `--aa` aside.
+/// [`against_the_area_oracle`] with the parameters `flags` set (e.g. a background), `--aa` aside; with
+/// global illumination (no ε in `flags`), the render's radiance cache and the oracle's paths.
 pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u32) -> [Comparison; 2] {
     let params = |aa| {
         let flags = Overrides { aa: Some(aa), ..flags.clone() };
@@ -244,7 +245,8 @@ pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u3
     };
     [Antialiasing::On, Antialiasing::Off].map(|aa| {
         let p = params(aa);
-        let setup = Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: None };
+        let cache = CacheConfig::for_params(&p);
+        let setup = Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache };
         let out = render(scene, &setup, None);
         let reference = picture("oracle", &oracle.image, Some(&oracle.image_std_error));
         let c = compare(&picture("render", &out.image, None), &reference).unwrap();
