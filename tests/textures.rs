@@ -210,6 +210,16 @@ fn missing_and_corrupt_textures_are_said() {
     assert!(warning.contains("material 'checker'") && warning.contains("using its Kd alone"), "{warning}");
     // Without its texture and without Kd the checker is MTL's default grey.
     assert_eq!(scene.mesh.surface_albedo(surface(&scene, "floor/")), Vec3::splat(0.8));
+    // Named by an absolute path (as converted assets often are), the warning says where it looked.
+    let mtl = std::fs::read_to_string(dir.join("room.mtl")).unwrap();
+    let absolute = dir.join("gone").join("checker.png");
+    std::fs::write(dir.join("room.mtl"), mtl.replace("map_Kd checker.png", &format!("map_Kd {}", absolute.display())))
+        .unwrap();
+    let scene = Scene::load(&dir.join("room.toml")).unwrap();
+    let warning = scene.warnings.iter().find(|w| w.contains("checker.png")).expect("a warning names the file");
+    let said = format!("'{}' not found (looked at it, then for its file name in ", absolute.display());
+    assert!(warning.contains(&said), "{warning}");
+    std::fs::write(dir.join("room.mtl"), mtl).unwrap();
     std::fs::write(dir.join("checker.png"), b"\x89PNG\r\n\x1a\n truncated").unwrap();
     let error = format!("{:#}", Scene::load(&dir.join("room.toml")).unwrap_err());
     assert!(error.contains("checker.png") && error.contains("not a readable image"), "{error}");

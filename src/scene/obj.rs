@@ -300,8 +300,13 @@ impl TextureFiles {
         let candidates = dirs.iter().flat_map(|d| [Some(d.join(name)), name.file_name().map(|f| d.join(f))]);
         let Some(path) = candidates.flatten().find(|p| p.is_file()) else {
             let looked = dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ");
+            // An absolute path is looked at as written, then by file name beside the libraries.
+            let looked = match name.is_absolute() {
+                true => format!("looked at it, then for its file name in {looked}"),
+                false => format!("looked in {looked}"),
+            };
             warnings.push(format!(
-                "material '{material}': {statement} texture '{}' not found (looked in {looked}); {}",
+                "material '{material}': {statement} texture '{}' not found ({looked}); {}",
                 name.display(),
                 usage.fallback()
             ));
