@@ -31,6 +31,18 @@ const DEADLINE: Duration = Duration::from_secs(10);
 const CAMERA: &str = "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nvfov_deg = 40\n[image]\nwidth = 16\nheight = 16\n";
 const QUAD: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n";
 
+/// A valid file's bytes with `changes` made (each `(at, byte)`, `at` wrapped to the length) and cut to the
+/// fraction `cut` of its length.
+fn mutate(bytes: &mut Vec<u8>, changes: &[(usize, u8)], cut: Option<f64>) {
+    for &(at, byte) in changes {
+        let n = bytes.len();
+        bytes[at % n] = byte;
+    }
+    if let Some(f) = cut {
+        bytes.truncate((bytes.len() as f64 * f) as usize);
+    }
+}
+
 /// `cases` per property, a fixed seed; `PROPTEST_CASES` and `PROPTEST_RNG_SEED` override either.
 fn config(cases: u32) -> Config {
     let mut config = Config { failure_persistence: None, ..Config::default() };
@@ -524,13 +536,7 @@ proptest! {
     ) {
         let dir = scratch("glb");
         let mut bytes = std::fs::read(common::gltf::write_glb(&dir, "mesh", &[])).unwrap();
-        for (at, byte) in changes {
-            let n = bytes.len();
-            bytes[at % n] = byte;
-        }
-        if let Some(f) = cut {
-            bytes.truncate((bytes.len() as f64 * f) as usize);
-        }
+        mutate(&mut bytes, &changes, cut);
         Files::new(&dir).write("mesh.glb", &bytes).scene(&format!("mesh = \"mesh.glb\"\n{CAMERA}")).check()?;
     }
 
@@ -546,13 +552,7 @@ proptest! {
         let image = image::RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 32) as u8, (y * 32) as u8, 128]));
         image.save(dir.join(&name)).unwrap();
         let mut bytes = std::fs::read(dir.join(&name)).unwrap();
-        for (at, byte) in changes {
-            let n = bytes.len();
-            bytes[at % n] = byte;
-        }
-        if let Some(f) = cut {
-            bytes.truncate((bytes.len() as f64 * f) as usize);
-        }
+        mutate(&mut bytes, &changes, cut);
         let obj = "mtllib m.mtl\nusemtl a\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
                    f 1/1 2/2 3/3 4/4\n";
         Files::new(&dir).write(&name, &bytes).write("mesh.obj", obj.as_bytes())
@@ -578,13 +578,7 @@ proptest! {
             _ => image::DynamicImage::ImageRgb32F(image).save(dir.join(&name)).unwrap(),
         }
         let mut bytes = std::fs::read(dir.join(&name)).unwrap();
-        for (at, byte) in changes {
-            let n = bytes.len();
-            bytes[at % n] = byte;
-        }
-        if let Some(f) = cut {
-            bytes.truncate((bytes.len() as f64 * f) as usize);
-        }
+        mutate(&mut bytes, &changes, cut);
         Files::new(&dir).write(&name, &bytes).write("mesh.obj", format!("mtllib m.mtl\nusemtl a\n{QUAD}").as_bytes())
             .write("m.mtl", b"newmtl a\nKd 0.5 0.5 0.5\n")
             .scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}\n[sky]\nmap = \"{name}\"\n")).check()?;
