@@ -39,6 +39,25 @@ fn patchy(d: Vec3) -> Vec3 {
     0.3 * gradient(d) + Vec3::new(6.0, 5.0, 4.0) * (d.dot(patch) > 20f32.to_radians().cos()) as u8 as f32
 }
 
+/// The courtyard (`common::courtyard_mesh`) under a `sky_size` patchy sky map, in scratch directory `name`,
+/// seen by `camera` (the scene file's `[camera]` and `[image]` lines) with `sky` lines added to `[sky]`.
+fn patchy_courtyard(name: &str, sky_size: (u32, u32), camera: &str, sky: &str) -> Scene {
+    let dir = common::scratch(name);
+    common::courtyard_mesh(&dir, 0.6);
+    write_sky(&dir.join("sky.exr"), sky_size, patchy);
+    let toml = format!("mesh = \"yard.obj\"\n{camera}[sky]\nmap = \"sky.exr\"\n{sky}");
+    std::fs::write(dir.join("yard.toml"), toml).unwrap();
+    Scene::load(&dir.join("yard.toml")).unwrap()
+}
+
+/// The camera of the oracle tests, over an image `width` × `height`.
+fn yard_camera(width: u32, height: u32) -> String {
+    format!(
+        "[camera]\neye = [1.2, 2.0, 3.4]\ntarget = [-0.3, 0.6, -0.5]\nvfov_deg = 50\n[image]\nwidth = {width}\n\
+         height = {height}\n"
+    )
+}
+
 /// A horizontal plane of albedo ρ under the gradient receives `E = π·A + 2π·B/3` (per channel, times the
 /// tint): its radiance is `ρ·(A + 2B/3)` everywhere. The GPU (every pixel sensed, rd 32: the sky read on
 /// the mip level of each sensor texel) within 0.3 %, and the oracle within its noise.
@@ -85,16 +104,7 @@ fn a_plane_under_a_sky_gradient_is_lit_by_the_closed_form() {
 /// the refinement interpolated across the patch's shadows.)
 #[test]
 fn a_courtyard_under_a_patchy_sky_within_two_percent_of_the_oracle() {
-    let dir = common::scratch("sky-oracle");
-    common::courtyard_mesh(&dir, 0.6);
-    write_sky(&dir.join("sky.exr"), (128, 64), patchy);
-    std::fs::write(
-        dir.join("yard.toml"),
-        "mesh = \"yard.obj\"\n[camera]\neye = [1.2, 2.0, 3.4]\ntarget = [-0.3, 0.6, -0.5]\nvfov_deg = 50\n\
-         [image]\nwidth = 128\nheight = 96\n[sky]\nmap = \"sky.exr\"\nstrength = 1.5\nrotation_deg = 90\n",
-    )
-    .unwrap();
-    let scene = Scene::load(&dir.join("yard.toml")).unwrap();
+    let scene = patchy_courtyard("sky-oracle", (128, 64), &yard_camera(128, 96), "strength = 1.5\nrotation_deg = 90\n");
     assert_eq!((scene.sky.as_ref().unwrap().strength, scene.sky.as_ref().unwrap().rotation_deg), (1.5, 90.0));
     let flags = Overrides { epsilon: Some(0.0), ..Default::default() };
     let [on, _] = common::against_the_area_oracle_with(&scene, flags, 1024);
@@ -106,16 +116,7 @@ fn a_courtyard_under_a_patchy_sky_within_two_percent_of_the_oracle() {
 /// its own pass) against the path tracer over pixel squares: within 2 % over the whole image and inside.
 #[test]
 fn a_courtyard_under_a_sky_map_with_global_illumination_within_two_percent_of_the_path_tracer() {
-    let dir = common::scratch("sky-gi");
-    common::courtyard_mesh(&dir, 0.6);
-    write_sky(&dir.join("sky.exr"), (128, 64), patchy);
-    std::fs::write(
-        dir.join("yard.toml"),
-        "mesh = \"yard.obj\"\n[camera]\neye = [1.2, 2.0, 3.4]\ntarget = [-0.3, 0.6, -0.5]\nvfov_deg = 50\n\
-         [image]\nwidth = 96\nheight = 72\n[sky]\nmap = \"sky.exr\"\n",
-    )
-    .unwrap();
-    let scene = Scene::load(&dir.join("yard.toml")).unwrap();
+    let scene = patchy_courtyard("sky-gi", (128, 64), &yard_camera(96, 72), "");
     let [on, _] = common::against_the_area_oracle_with(&scene, Overrides::default(), 1024);
     assert!(on.whole.own_error.unwrap() <= 0.02, "whole image {:?}", on.whole);
     assert!(on.interior.own_error.unwrap() <= 0.02, "interior {:?}", on.interior);
@@ -125,16 +126,8 @@ fn a_courtyard_under_a_sky_map_with_global_illumination_within_two_percent_of_th
 /// 0; `--aa off`, along its centre's ray.
 #[test]
 fn background_pixels_show_the_sky_map() {
-    let dir = common::scratch("sky-background");
-    common::courtyard_mesh(&dir, 0.6);
-    write_sky(&dir.join("sky.exr"), (64, 32), patchy);
-    std::fs::write(
-        dir.join("yard.toml"),
-        "mesh = \"yard.obj\"\n[camera]\neye = [0, 1, 5]\ntarget = [0, 1.6, 0]\nvfov_deg = 60\n[image]\n\
-         width = 40\nheight = 30\n[sky]\nmap = \"sky.exr\"\n",
-    )
-    .unwrap();
-    let scene = Scene::load(&dir.join("yard.toml")).unwrap();
+    let camera = "[camera]\neye = [0, 1, 5]\ntarget = [0, 1.6, 0]\nvfov_deg = 60\n[image]\nwidth = 40\nheight = 30\n";
+    let scene = patchy_courtyard("sky-background", (64, 32), camera, "");
     let sky = scene.sky.clone().unwrap();
     for (aa, side) in [(sensorlight::params::Antialiasing::On, 8), (sensorlight::params::Antialiasing::Off, 1)] {
         let mut setup = common::every_pixel(sensorlight::sensors::SensorKind::Hemicube, 16, 0.0);
