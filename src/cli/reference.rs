@@ -28,7 +28,7 @@ pub struct ReferenceArgs {
     #[command(flatten)]
     image: ImageFlags,
     #[command(flatten)]
-    sun: LightFlags,
+    lights: LightFlags,
     /// Samples per pixel, a multiple of 4 (powers of two stratify best). Each is one cosine-weighted
     /// direction plus, if the scene has emitters, one point on an emitter, combined by multiple importance
     /// sampling (up to 2 rays). With global illumination (--bounces other than 0) the direction is a path:
@@ -49,7 +49,8 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         aa: args.image.aa,
         ..args.estimator.overrides()
     });
-    let (scene, resolved) = super::load_input(&args.scene, &flags, (args.image.width, args.image.height), &args.sun)?;
+    let (scene, resolved) =
+        super::load_input(&args.scene, &flags, (args.image.width, args.image.height), &args.lights)?;
     outputs.check(&[], &scene.input_paths())?;
     let params = resolved.estimator;
     let size = args.image.size(&scene)?;

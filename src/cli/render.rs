@@ -39,7 +39,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     image: ImageFlags,
     #[command(flatten)]
-    sun: LightFlags,
+    lights: LightFlags,
     #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
     estimator_kind: Option<EstimatorKind>,
     #[arg(long, help = sensor_size_help())]
@@ -133,7 +133,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     );
     outputs.check(&extra, &[&args.scene])?;
     let size = (args.image.width, args.image.height);
-    let (scene, params) = super::load_input(&args.scene, &args.overrides(), size, &args.sun)?;
+    let (scene, params) = super::load_input(&args.scene, &args.overrides(), size, &args.lights)?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
