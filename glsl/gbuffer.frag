@@ -14,7 +14,7 @@ layout(location = 3) in vec2 in_uv;
 layout(location = 0) out vec4 out_position;  // w = 1 where a surface is seen
 layout(location = 1) out vec4 out_normal;    // facing the camera; w = 1 if the front side is seen
 layout(location = 2) out vec4 out_albedo;
-layout(location = 3) out vec4 out_emission;  // Ke where an emitter's front side is seen
+layout(location = 3) out vec4 out_emission;  // Ke (× its texture) where an emitter's front side is seen
 layout(location = 4) out uint out_surface;
 
 void main() {
@@ -34,6 +34,11 @@ void main() {
         albedo *= sample_footprint(s.kd_map - 1u, in_uv, dx, dy).rgb;
     }
     out_albedo = vec4(albedo, 1.0);
-    out_emission = vec4((front && s.ke.w > 0.0) ? s.ke.rgb : vec3(0.0), 1.0);
+    // Ke times its emission texture's mean over the pixel, as the albedo.
+    vec3 emission = s.ke.rgb;
+    if (s.ke_map != 0u) {
+        emission *= sample_footprint(s.ke_map - 1u, in_uv, dx, dy).rgb;
+    }
+    out_emission = vec4((front && s.ke.w > 0.0) ? emission : vec3(0.0), 1.0);
     out_surface = in_surface;
 }

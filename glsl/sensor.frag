@@ -10,8 +10,8 @@
 //
 // The TEXTURES variant, for scenes with textures or cut-outs, reads a surface's texture at the mip level
 // the sensor texel covers (Kd·ε and the cache's light scaled from the surface's mean albedo to the texel's),
-// and discards where a surface is cut out (a shader that may discard keeps the depth test from running
-// early, so other scenes do without it).
+// multiplies an emitter's front by its emission texture, and discards where a surface is cut out (a shader
+// that may discard keeps the depth test from running early, so other scenes do without it).
 // variant: TEXTURES
 #include "cache.glsl"
 #ifdef TEXTURES
@@ -51,7 +51,15 @@ void main() {
 #endif
     // An emitter's front as the vertex shader prepared it; any other side reflects, Kd·ε × scale.
     bool emitter_front = gl_FrontFacing && in_group > 0.0;
-    out_ck = emitter_front ? vec4(in_ck_front, in_group) : vec4((gl_FrontFacing ? in_ck_front : in_ck_back) * scale, 0.0);
+    vec3 front = in_ck_front;
+#ifdef TEXTURES
+    // The paper's estimator sees the emission texture at the texel's level (the exact one's Ck is 0 here).
+    if (emitter_front && s.ke_map != 0u) {
+        uint map = s.ke_map - 1u;
+        front *= sample_texture(map, in_uv, texture_lod(map, dx, dy)).rgb;
+    }
+#endif
+    out_ck = emitter_front ? vec4(front, in_group) : vec4((gl_FrontFacing ? front : in_ck_back) * scale, 0.0);
     if (push.cache != 0u) {
         vec3 reflected = cached_radiance(in_world, in_eye, in_surface, gl_FrontFacing) * scale;
         out_ck.rgb += out_ck.a > 0.0 ? reflected / push.emission_scale : reflected;

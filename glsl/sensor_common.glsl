@@ -52,7 +52,7 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
     out_surface = in_surface;
     out_eye = view.eye.xyz;
 #ifdef TEXTURES
-    out_uv = (s.kd_map | s.alpha_map) != 0u ? uvs[gl_VertexIndex] : vec2(0.0);
+    out_uv = (s.kd_map | s.ke_map | s.alpha_map) != 0u ? uvs[gl_VertexIndex] : vec2(0.0);
 #endif
     return view.view_proj * p;
 }

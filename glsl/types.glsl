@@ -9,9 +9,9 @@ struct GpuSurface {
     vec4 ke;         // emitted radiance Ke (rgb); w = light group + 1 for an emitter (front face only), else 0
     vec4 kd_factor;  // Kd itself (rgb): the G-buffer multiplies its texture by it
     uint kd_map;     // colour texture index + 1 (GpuTexture), 0 for none
+    uint ke_map;     // emission texture index + 1, 0 for none: an emitter's front emits Ke times it
     uint alpha_map;  // cut-out texture index + 1, 0 for none: discarded where its alpha < alpha_threshold
     float alpha_threshold;
-    uint _pad;
 };
 
 // Where a texture's levels lie in the scene's texel buffer (src/scene/texture.rs draws the layout).

@@ -324,16 +324,16 @@ pub fn surfaces(mesh: &Mesh, lights: &Lights) -> Vec<GpuSurface> {
             let group = lights.surface_group.get(&id).map_or(0.0, |&g| g as f32 + 1.0);
             // A texture applies where the mesh has texture coordinates.
             let placed = !mesh.uvs.is_empty();
-            let kd_map = m.kd_map.filter(|_| placed).map_or(0, |t| t as u32 + 1);
+            let index = |map: Option<usize>| map.filter(|_| placed).map_or(0, |t| t as u32 + 1);
             let cutout = m.cutout.filter(|_| placed);
             GpuSurface {
                 kd: mesh.surface_albedo(id).extend(0.0),
                 ke: m.ke.extend(group),
                 kd_factor: m.kd.extend(0.0),
-                kd_map,
+                kd_map: index(m.kd_map),
+                ke_map: index(m.ke_map),
                 alpha_map: cutout.map_or(0, |c| c.map as u32 + 1),
                 alpha_threshold: cutout.map_or(0.0, |c| c.threshold),
-                _pad: 0,
             }
         }))
         .collect()

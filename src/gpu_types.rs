@@ -29,11 +29,12 @@ pub struct GpuSurface {
     pub kd_factor: Vec4,
     /// Its colour texture's index + 1 in the texture table (`GpuTexture`), 0 for none.
     pub kd_map: u32,
+    /// Its emission texture's index + 1, 0 for none: what is seen of an emitter's front is `Ke` times it.
+    pub ke_map: u32,
     /// Its cut-out's texture index + 1, 0 for none: a fragment whose texture alpha (bilinear, level 0) is
     /// under `alpha_threshold` is discarded (`obj::Cutout`).
     pub alpha_map: u32,
     pub alpha_threshold: f32,
-    pub _pad: u32,
 }
 
 /// Where a texture's levels lie in the scene's texel buffer (`scene::texture` draws the layout).

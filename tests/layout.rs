@@ -82,7 +82,7 @@ macro_rules! rust_layout {
 fn shared_structs_match_glsl() {
     let glsl = layouts(shaders::LAYOUT_PROBE_COMP);
     let rust = [
-        (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke, kd_factor, kd_map, alpha_map, alpha_threshold, _pad)),
+        (0, "GpuSurface", rust_layout!(GpuSurface: kd, ke, kd_factor, kd_map, ke_map, alpha_map, alpha_threshold)),
         (1, "GBufferPush", rust_layout!(GBufferPush: view_proj)),
         (2, "GpuSensorView", rust_layout!(GpuSensorView: view_proj, clip, eye, layer, flags, _pad)),
         (3, "SensorPush", rust_layout!(SensorPush: epsilon, first_view, layer_base, exact, emission_scale, cache)),

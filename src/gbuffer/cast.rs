@@ -17,7 +17,7 @@ pub struct Visible {
     /// Turned towards the camera; w = 1 where the front side is seen.
     pub normal: Vec4,
     pub albedo: Vec4,
-    /// `Ke` where an emitter's front is seen, else 0.
+    /// `Ke` (times its emission texture there) where an emitter's front is seen, else 0.
     pub emission: Vec4,
     pub surface: u32,
 }
@@ -31,7 +31,8 @@ pub fn first_surface(scene: &Scene, bvh: &Bvh, ray: &Ray) -> Option<Visible> {
     let position = ray.at(hit.t);
     let shading = scene.mesh.shading_normal(hit.triangle as usize, position);
     let normal = if front { shading } else { -shading };
-    let emission = if front && material.is_emitter() { material.ke } else { glam::Vec3::ZERO };
+    let emitting = front && material.is_emitter();
+    let emission = if emitting { scene.mesh.emission_at(hit.triangle as usize, position) } else { glam::Vec3::ZERO };
     Some(Visible {
         position: position.extend(1.0),
         normal: normal.extend(if front { 1.0 } else { 0.0 }),

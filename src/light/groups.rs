@@ -67,7 +67,8 @@ impl Lights {
         e
     }
 
-    /// The emitters of `mesh` (triangles whose material emits), gathered into groups.
+    /// The emitters of `mesh` (triangles whose material emits; an emission-textured one as its parts,
+    /// [`Mesh::emitter_parts`]), gathered into groups.
     pub fn new(mesh: &Mesh) -> Self {
         // Emitting surfaces, in id order, with their triangles.
         let mut surfaces: BTreeMap<SurfaceId, Vec<usize>> = BTreeMap::new();
@@ -84,6 +85,7 @@ impl Lights {
         let centroids: Vec<Vec3> = ids.iter().map(centroid).collect();
         let assignment = cluster(&centroids, MAX_GROUPS);
 
+        let split = mesh.emitter_split();
         let mut lights = Lights::default();
         let groups = assignment.iter().copied().max().map_or(0, |g| g + 1);
         for g in 0..groups {
@@ -91,12 +93,12 @@ impl Lights {
             let (mut bounds, mut power) = (Aabb::EMPTY, 0.0);
             for (_, id) in ids.iter().enumerate().filter(|(k, _)| assignment[*k] == g) {
                 lights.surface_group.insert(*id, g as u32);
-                let ke = mesh.material_of(*id).ke;
                 for &i in &surfaces[id] {
-                    let v = mesh.triangles[i].v;
-                    v.iter().for_each(|&p| bounds.grow(p));
-                    power += luminance(ke) * triangle_area(&v);
-                    lights.emitters.push(Emitter { v, ke, group: g as u32 });
+                    for (v, ke) in mesh.emitter_parts(i, split) {
+                        v.iter().for_each(|&p| bounds.grow(p));
+                        power += luminance(ke) * triangle_area(&v);
+                        lights.emitters.push(Emitter { v, ke, group: g as u32 });
+                    }
                 }
             }
             lights.groups.push(LightGroup { emitters: first..lights.emitters.len() as u32, bounds, power });
@@ -172,8 +174,8 @@ mod tests {
             groups.push((names[i].as_str(), 1, rect(*c, Vec3::X * 0.1, Vec3::Z * 0.1, -Vec3::Y)));
         }
         let materials = vec![
-            Material { name: "white".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None, cutout: None },
-            Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::splat(10.0), kd_map: None, cutout: None },
+            Material::new("white", Vec3::splat(0.5), Vec3::ZERO),
+            Material::new("lamp", Vec3::ZERO, Vec3::splat(10.0)),
         ];
         let camera = Camera::look_at(Vec3::new(0.0, 5.0, 5.0), Vec3::ZERO, Vec3::Y, 60.0).unwrap();
         from_groups(groups, materials, camera, ImageSize { width: 4, height: 4 }).mesh

@@ -213,7 +213,8 @@ impl<'a> Integrator<'a> {
         let material = self.scene.mesh.material_of(tri.surface);
         let cos_light = -ray.dir.dot(tri.normal);
         if cos_light > 0.0 && material.is_emitter() {
-            Seen::Emitter { triangle: hit.triangle, ke: material.ke, t: hit.t, cos_light }
+            let ke = self.scene.mesh.emission_at(hit.triangle as usize, ray.at(hit.t));
+            Seen::Emitter { triangle: hit.triangle, ke, t: hit.t, cos_light }
         } else {
             let albedo = self.scene.mesh.albedo_at(hit.triangle as usize, ray.at(hit.t));
             Seen::Other(albedo * self.params.indirect.epsilon())
@@ -364,7 +365,7 @@ impl<'a> Integrator<'a> {
         if hit.is_none_or(|h| h.triangle != sample.triangle) {
             return Vec3::ZERO;
         }
-        let ke = self.scene.mesh.material_of(tri.surface).ke;
+        let ke = self.scene.mesh.emission_at(sample.triangle as usize, sample.point);
         let p_cosine = local.z as f64 / PI;
         let p_light = lights.area_pdf(sample.triangle) * (distance as f64).powi(2) / cos_light as f64;
         // f / p_l · w_l with f = Ke·cosθ/π = Ke·p_c.

@@ -42,8 +42,10 @@ impl Lights {
             let material = mesh.material_of(t.surface);
             if material.is_emitter() {
                 triangles.push(i as u32);
-                // Ke ≥ 0 with one channel > 0, so the luminance is > 0: every emitter can be picked.
-                power.push(material.ke.dot(LUMINANCE) as f64 * area(&t.v));
+                // Ke ≥ 0 with one channel > 0, so the luminance is > 0; an emission texture's mean may be
+                // black where the texture is not quite: a floor keeps every emitter pickable (unbiased).
+                let mean = mesh.mean_emission(i).dot(LUMINANCE).max(1e-3 * material.ke.dot(LUMINANCE));
+                power.push(mean as f64 * area(&t.v));
             }
         }
         let total: f64 = power.iter().sum();
@@ -110,13 +112,7 @@ mod tests {
     use crate::scene::{Camera, ImageSize, Material};
 
     fn mesh(groups: Vec<(&str, usize, Vec<[Vec3; 3]>)>, ke: [f32; 3]) -> Mesh {
-        let material = |name: &str, ke: f32| Material {
-            name: name.into(),
-            kd: Vec3::splat(0.5),
-            ke: Vec3::splat(ke),
-            kd_map: None,
-            cutout: None,
-        };
+        let material = |name: &str, ke: f32| Material::new(name, Vec3::splat(0.5), Vec3::splat(ke));
         let materials = ke.iter().enumerate().map(|(i, &k)| material(&format!("m{i}"), k)).collect();
         let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 60.0).unwrap();
         from_groups(groups, materials, camera, ImageSize { width: 1, height: 1 }).mesh

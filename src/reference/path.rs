@@ -90,7 +90,7 @@ impl Integrator<'_> {
                     let p_light = lights.area_pdf(hit.triangle) * (hit.t as f64).powi(2) / cos_light as f64;
                     power_heuristic(p_cosine, p_light)
                 });
-                radiance += beta * material.ke * weight as f32;
+                radiance += beta * self.scene.mesh.emission_at(hit.triangle as usize, ray.at(hit.t)) * weight as f32;
             }
             if depth == max_bounces {
                 return radiance;

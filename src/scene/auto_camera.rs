@@ -225,13 +225,7 @@ mod inside_tests {
         if !open {
             groups.push(("front", 0, rect(c + 3.0 * z, 2.0 * x, 1.25 * y, -z)));
         }
-        let m = |name: &str, kd: f32, ke: f32| Material {
-            name: name.into(),
-            kd: Vec3::splat(kd),
-            ke: Vec3::splat(ke),
-            kd_map: None,
-            cutout: None,
-        };
+        let m = |name: &str, kd: f32, ke: f32| Material::new(name, Vec3::splat(kd), Vec3::splat(ke));
         let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0).unwrap();
         from_groups(groups, vec![m("white", 0.7, 0.0), m("light", 0.0, 5.0)], camera, DEFAULT_IMAGE).mesh
     }

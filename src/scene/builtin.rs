@@ -66,13 +66,7 @@ pub fn lightbox(size: ImageSize) -> Scene {
         groups.push(("block", 0, rect(center + n * half, u * half, v * half, n)));
     }
     let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), c, y, 40.0).expect("valid camera");
-    let material = |name: &str, kd: Vec3, ke: f32| Material {
-        name: name.into(),
-        kd,
-        ke: Vec3::splat(ke),
-        kd_map: None,
-        cutout: None,
-    };
+    let material = |name: &str, kd: Vec3, ke: f32| Material::new(name, kd, Vec3::splat(ke));
     let materials = vec![
         material("white", Vec3::splat(0.7), 0.0),
         material("red", Vec3::new(0.7, 0.1, 0.1), 0.0),

@@ -8,9 +8,9 @@
 //!   unit by the inverse transpose); points and lines are skipped with a warning;
 //! - a material's base colour factor as `Kd` (linear RGB) and its base colour texture (`TEXCOORD_0`) as its
 //!   colour texture (`Material::kd_map`, as an OBJ's `map_Kd`), its emissive factor times
-//!   `KHR_materials_emissive_strength` as `Ke`; `alphaMode` MASK cuts a primitive out where the factor's
-//!   alpha is under the cutoff, and with a base colour texture where factor × texture alpha is
-//!   (`obj::Cutout`), BLEND is drawn opaque (said); other textures, metalness and roughness are
+//!   `KHR_materials_emissive_strength` as `Ke` and its emissive texture (`TEXCOORD_0`) as
+//!   `Material::ke_map` (an OBJ's `map_Ke`); `alphaMode` MASK cuts a primitive out where the factor's alpha is
+//!   under the cutoff, and with a base colour texture where factor × texture alpha is (`obj::Cutout`), BLEND is drawn opaque (said); other textures, metalness and roughness are
 //!   named once per material as not used yet; the glTF default material is white (`Kd` 1);
 //! - the first camera met in the tree (perspective), as the scene's camera where the scene file names none;
 //! - `KHR_lights_punctual`: a point or spot light becomes a small emitting sphere of 8 × 16 facets
@@ -193,11 +193,21 @@ impl Reader<'_> {
                     unused.push("its base colour texture (on TEXCOORD_1 or later; the factor is used)");
                     None
                 }
-                Some(info) => self.image(&name, info.texture().source())?,
+                Some(info) => self.image(&name, "base colour", info.texture().source())?,
                 None => None,
             };
-            if m.emissive_texture().is_some() {
-                unused.push("its emissive texture (the factor is used)");
+            let ke_map = match m.emissive_texture() {
+                Some(info) if info.tex_coord() != 0 => {
+                    unused.push("its emissive texture (on TEXCOORD_1 or later; the factor is used)");
+                    None
+                }
+                Some(info) => self.image(&name, "emissive", info.texture().source())?,
+                None => None,
+            };
+            if ke_map.is_some() && ke.max_element() <= 0.0 {
+                self.warn(format!(
+                    "material '{name}': its emissive texture is multiplied by factor 0: it emits nothing"
+                ));
             }
             if pbr.metallic_factor() > 0.0 {
                 unused.push("metalness (treated as diffuse)");
@@ -220,22 +230,21 @@ impl Reader<'_> {
             if !unused.is_empty() {
                 self.warn(format!("material '{name}': {} not used", unused.join(", ")));
             }
-            self.mesh.materials.push(Material { name, kd: Vec3::new(r, g, b), ke, kd_map, cutout });
+            self.mesh.materials.push(Material {
+                kd_map,
+                ke_map,
+                cutout,
+                ..Material::new(&name, Vec3::new(r, g, b), ke)
+            });
         }
-        self.mesh.materials.push(Material {
-            name: "(glTF default, white)".into(),
-            kd: Vec3::ONE,
-            ke: Vec3::ZERO,
-            kd_map: None,
-            cutout: None,
-        });
+        self.mesh.materials.push(Material::new("(glTF default, white)", Vec3::ONE, Vec3::ZERO));
         Ok(())
     }
 
     /// The texture of `image`, read once (from a buffer view, a file or a `data:` URI) for material
-    /// `material`: a file that cannot be read is a warning (the factor alone is used), an image that cannot
-    /// be decoded an error naming it.
-    fn image(&mut self, material: &str, image: gltf::Image) -> Result<Option<usize>> {
+    /// `material`'s `what` ("base colour", "emissive"; both are sRGB): a file that cannot be read is a warning
+    /// (the factor alone is used), an image that cannot be decoded an error naming it.
+    fn image(&mut self, material: &str, what: &str, image: gltf::Image) -> Result<Option<usize>> {
         if let Some(&(_, texture)) = self.images.iter().find(|(i, _)| *i == image.index()) {
             return Ok(texture);
         }
@@ -255,8 +264,8 @@ impl Reader<'_> {
                     Err(e) => {
                         let shown = if uri.starts_with("data:") { "(a data: URI)" } else { uri };
                         self.warn(format!(
-                            "material '{material}': cannot read its base colour texture {shown}: {e}; the factor \
-                             alone is used"
+                            "material '{material}': cannot read its {what} texture {shown}: {e}; the factor alone \
+                             is used"
                         ));
                         None
                     }
@@ -279,16 +288,16 @@ impl Reader<'_> {
     /// Material `index`, or where it has a texture and the primitive `name` no texture coordinates, its copy
     /// without the texture (said).
     fn material_without_coordinates(&mut self, index: usize, name: &str) -> usize {
-        if self.mesh.materials[index].kd_map.is_none() && self.mesh.materials[index].cutout.is_none() {
+        if !self.mesh.materials[index].is_textured() {
             return index;
         }
         if let Some(&(_, copy)) = self.untextured.iter().find(|(m, _)| *m == index) {
             return copy;
         }
-        let material = Material { kd_map: None, cutout: None, ..self.mesh.materials[index].clone() };
+        let material = self.mesh.materials[index].untextured();
         self.warn(format!(
-            "{name}: material '{}' has a base colour texture but the primitive no TEXCOORD_0; the factor alone is \
-             used, not cut out",
+            "{name}: material '{}' has a texture but the primitive no TEXCOORD_0; the factors alone are used, not \
+             cut out",
             material.name
         ));
         self.mesh.materials.push(material);
@@ -387,8 +396,7 @@ impl Reader<'_> {
             }
             let material_index = material.index().unwrap_or(self.mesh.materials.len() - 1);
             let m = &self.mesh.materials[material_index];
-            let textured = m.kd_map.is_some() || m.cutout.is_some();
-            let uvs: Option<Vec<Vec2>> = match textured {
+            let uvs: Option<Vec<Vec2>> = match m.is_textured() {
                 true => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),
                 false => None,
             };
@@ -448,13 +456,7 @@ impl Reader<'_> {
             // averaged over directions, is the light's.
             let area: f32 = triangles.iter().map(super::triangle_area).sum();
             let ke = power * 4.0 / area;
-            self.mesh.materials.push(Material {
-                name: format!("light '{name}'"),
-                kd: Vec3::ZERO,
-                ke,
-                kd_map: None,
-                cutout: None,
-            });
+            self.mesh.materials.push(Material::new(&format!("light '{name}'"), Vec3::ZERO, ke));
             let material = self.mesh.materials.len() - 1;
             self.mesh.groups.push(ObjGroup {
                 name: format!("light '{name}'"),

@@ -38,9 +38,12 @@ pub struct Material {
     pub name: String,
     /// The albedo, or with `kd_map` the factor its texture is multiplied by.
     pub kd: Vec3,
+    /// The emitted radiance, or with `ke_map` the factor its texture is multiplied by.
     pub ke: Vec3,
     /// The index of its colour texture in the mesh's textures (`map_Kd`, glTF `baseColorTexture`).
     pub kd_map: Option<usize>,
+    /// The index of its emission texture in the mesh's textures (`map_Ke`, glTF `emissiveTexture`).
+    pub ke_map: Option<usize>,
     /// Where it is cut out (`map_d`, glTF `alphaMode` MASK): no light is sent or stopped there.
     pub cutout: Option<Cutout>,
 }
@@ -66,8 +69,23 @@ pub const MAX_COLOUR: f32 = 1e18;
 impl Material {
     pub const DEFAULT_KD: f32 = 0.8;
 
+    /// A flat-coloured material: albedo `kd`, emitted radiance `ke`, no texture.
+    pub fn new(name: &str, kd: Vec3, ke: Vec3) -> Self {
+        Self { name: name.to_owned(), kd, ke, kd_map: None, ke_map: None, cutout: None }
+    }
+
+    /// The same material without its textures: what a surface that gives no texture coordinates uses.
+    pub fn untextured(&self) -> Self {
+        Self { kd_map: None, ke_map: None, cutout: None, ..self.clone() }
+    }
+
     pub fn is_emitter(&self) -> bool {
         self.ke.max_element() > 0.0
+    }
+
+    /// Whether a texture colours, lights or cuts it out: then its surfaces need texture coordinates.
+    pub fn is_textured(&self) -> bool {
+        self.kd_map.is_some() || self.ke_map.is_some() || self.cutout.is_some()
     }
 }
 
@@ -170,6 +188,11 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             Some(file) => textures.find(&m.name, file, TextureUse::Colour, &mtl_dirs, &mut warnings)?,
             None => None,
         };
+        // tobj keeps `map_Ke` among the statements it does not know.
+        let ke_map = match m.unknown_param.get("map_Ke") {
+            Some(file) => textures.find(&m.name, file, TextureUse::Emission, &mtl_dirs, &mut warnings)?,
+            None => None,
+        };
         let mut cutout = match &m.dissolve_texture {
             Some(file) => textures.find(&m.name, file, TextureUse::Mask, &mtl_dirs, &mut warnings)?,
             None => None,
@@ -179,14 +202,17 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             warnings.push(format!("material '{}': an emitter is not cut out: its map_d is ignored", m.name));
             cutout = None;
         }
-        // MTL multiplies `map_Kd` by `Kd`; without a `Kd`, the texture alone.
+        // MTL multiplies `map_Kd` by `Kd` and `map_Ke` by `Ke`; without the factor, the texture alone.
         let unstated = if kd_map.is_some() { 1.0 } else { Material::DEFAULT_KD };
+        let ke = m.emissive.map(Vec3::from).unwrap_or(if ke_map.is_some() { Vec3::ONE } else { Vec3::ZERO });
+        if ke_map.is_some() && ke.max_element() <= 0.0 {
+            warnings.push(format!("material '{}': its map_Ke is multiplied by Ke 0: it emits nothing", m.name));
+        }
         materials.push(Material {
-            name: m.name.clone(),
-            kd: m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(unstated)),
-            ke: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
             kd_map,
+            ke_map,
             cutout,
+            ..Material::new(&m.name, m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(unstated)), ke)
         });
     }
     let defined: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
@@ -200,13 +226,7 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
         }
     }
     let default_material = materials.len();
-    materials.push(Material {
-        name: "(default grey)".into(),
-        kd: Vec3::splat(Material::DEFAULT_KD),
-        ke: Vec3::ZERO,
-        kd_map: None,
-        cutout: None,
-    });
+    materials.push(Material::new("(default grey)", Vec3::splat(Material::DEFAULT_KD), Vec3::ZERO));
 
     for name in checked.with_normals.intersection(&checked.without_normals) {
         warnings.push(format!(
@@ -243,18 +263,17 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             false => Vec::new(),
         };
         let mut material = m.material_id.unwrap_or(default_material);
-        let mapped = materials[material].kd_map.is_some() || materials[material].cutout.is_some();
-        if uvs.is_empty() && mapped {
+        if uvs.is_empty() && materials[material].is_textured() {
             warnings.push(format!(
                 "{}: group '{}': material '{}' has a texture, but {} faces give texture coordinates ('vt'); \
-                 using its Kd alone, not cut out",
+                 using its Kd and Ke alone, not cut out",
                 path.display(),
                 model.name,
                 materials[material].name,
                 if checked.with_uvs.contains(&model.name) { "not all its" } else { "none of its" }
             ));
             // The material's copy without its texture, for this group alone.
-            materials.push(Material { kd_map: None, cutout: None, ..materials[material].clone() });
+            materials.push(materials[material].untextured());
             material = materials.len() - 1;
         }
         groups.push(ObjGroup { name: model.name, material, triangles, normals, uvs });
@@ -290,6 +309,7 @@ impl TextureFiles {
     ) -> Result<Option<usize>, LoadError> {
         let statement = match usage {
             TextureUse::Colour => "map_Kd",
+            TextureUse::Emission => "map_Ke",
             TextureUse::Mask => "map_d",
         };
         // `map_Kd -o 1 1 1 wood.png`: options before the name; only the name is used.
@@ -312,7 +332,8 @@ impl TextureFiles {
             ));
             return Ok(None);
         };
-        let key = (path, usage);
+        // A colour and an emission texture decode alike: one file, one texture.
+        let key = (path, usage.decoding());
         if let Some(&index) = self.by_path.get(&key) {
             return Ok(index);
         }
@@ -321,7 +342,7 @@ impl TextureFiles {
             Ok(bytes) => {
                 let name = path.display().to_string();
                 let decoded = match usage {
-                    TextureUse::Colour => Texture::decode(&bytes, &name),
+                    TextureUse::Colour | TextureUse::Emission => Texture::decode(&bytes, &name),
                     TextureUse::Mask => Texture::decode_mask(&bytes, &name),
                 };
                 let texture = decoded.map_err(|e| error(path, None, format!("material '{material}': {e:#}")))?;
@@ -347,6 +368,8 @@ impl TextureFiles {
 enum TextureUse {
     /// `map_Kd`: colour, multiplied by `Kd`.
     Colour,
+    /// `map_Ke`: emitted radiance, multiplied by `Ke`; decoded as a colour (sRGB).
+    Emission,
     /// `map_d`: a cut-out mask (its alpha, or its red where it has none).
     Mask,
 }
@@ -356,7 +379,16 @@ impl TextureUse {
     fn fallback(self) -> &'static str {
         match self {
             Self::Colour => "using its Kd alone",
+            Self::Emission => "using its Ke alone",
             Self::Mask => "not cut out",
+        }
+    }
+
+    /// How its file is decoded: the same for a colour and an emission texture.
+    fn decoding(self) -> Self {
+        match self {
+            Self::Emission => Self::Colour,
+            other => other,
         }
     }
 }
@@ -702,8 +734,8 @@ fn check_mtl(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Stri
             "illum" if args.first().and_then(|a| a.parse::<u8>().ok()).is_none() => {
                 return Err(err("'illum' needs an illumination model number (0 to 10)".into()));
             }
-            "newmtl" | "map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns" | "map_ns" | "map_NS"
-            | "bump" | "map_d"
+            "newmtl" | "map_Ka" | "map_Kd" | "map_Ke" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns" | "map_ns"
+            | "map_NS" | "bump" | "map_d"
                 if args.is_empty() =>
             {
                 let what = if keyword == "newmtl" { "a material name" } else { "a file name" };

@@ -237,7 +237,7 @@ mod tests {
         let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
         let groups = [ObjGroup { name: "box".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None, cutout: None }];
+        let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!(dropped, Dropped::default());
         assert_eq!(surfaces.len(), 2);
@@ -255,7 +255,7 @@ mod tests {
         assert_eq!(shading(None, Vec3::X), [Vec3::X; 3]);
         // Through `assign`: only where some group gives normals, and one per kept triangle.
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None, cutout: None }];
+        let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let flat = [ObjGroup {
             name: "f".into(),
             material: 0,
@@ -292,7 +292,7 @@ mod tests {
         let (o, x) = (Vec3::ZERO, Vec3::X);
         let triangles = vec![[o, x, Vec3::Z], [x, o, -Vec3::Z], [o, x, Vec3::Y]];
         let groups = [ObjGroup { name: "fin".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None, cutout: None }];
+        let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, .. } = assign(&groups, &materials);
         assert_eq!(surfaces.len(), 2);
         assert_eq!(tris.iter().map(|t| t.surface).collect::<Vec<_>>(), [1, 1, 2]);
@@ -307,7 +307,7 @@ mod tests {
             normals: Vec::new(),
             uvs: Vec::new(),
         }];
-        let materials = [Material { name: "m".into(), kd: Vec3::ONE, ke: Vec3::ZERO, kd_map: None, cutout: None }];
+        let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!((tris.len(), surfaces.len(), dropped.degenerate), (1, 1, 1));
         assert!((tris[0].normal - Vec3::Z).length() < 1e-6);

@@ -110,6 +110,26 @@ impl Texture {
         decode(self.levels.last().expect("a texture has levels").texels[0])
     }
 
+    /// The texels (of its full-resolution level) that a triangle with texture coordinates `uv` covers.
+    pub fn footprint(&self, uv: &[Vec2; 3]) -> f32 {
+        let size = Vec2::new(self.width() as f32, self.height() as f32);
+        0.5 * ((uv[1] - uv[0]) * size).perp_dot((uv[2] - uv[0]) * size).abs()
+    }
+
+    /// The mean colour and alpha over a triangle with texture coordinates `uv`: the mean of 16 points spread
+    /// evenly over it (the centroids of its 4 × 4 subdivision), read at the level of detail where each
+    /// covers its sixteenth of the footprint, so that together they cover it.
+    pub fn mean_over(&self, uv: &[Vec2; 3]) -> Vec4 {
+        const N: usize = 4;
+        let lod = 0.5 * (self.footprint(uv) / (N * N) as f32).max(1.0).log2();
+        let mut sum = Vec4::ZERO;
+        for part in super::subdivision(N) {
+            let centroid = (part[0] + part[1] + part[2]) / 3.0;
+            sum += self.sample(super::at_barycentric(uv, centroid), lod);
+        }
+        sum / (N * N) as f32
+    }
+
     /// Linear colour and alpha at `uv` (repeating) on level of detail `lod` (0: full resolution; between
     /// levels, both are blended): bilinear within a level, as `glsl/texture.glsl` samples.
     pub fn sample(&self, uv: Vec2, lod: f32) -> Vec4 {

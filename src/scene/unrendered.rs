@@ -1,7 +1,7 @@
 //! What an MTL material states that this renderer does not render. Every material is drawn as a diffuse
-//! `Kd` (its colour texture `map_Kd` included, cut out by `map_d`) that emits `Ke` (docs/DESIGN.md §1); a
-//! mirror, glass or another texture map would otherwise render as plain
-//! diffuse without a word. [`Unrendered`] collects, per material, the statements that would have changed its
+//! `Kd` (its colour texture `map_Kd` included, cut out by `map_d`) that emits `Ke` (times `map_Ke`)
+//! (docs/DESIGN.md §1); a mirror, glass or another texture map would otherwise render as plain diffuse
+//! without a word. [`Unrendered`] collects, per material, the statements that would have changed its
 //! look, and says them once per material: `materials.mtl: material 'glass': Ni, Tf, illum 7 ignored
 //! (treated as diffuse)`.
 //!
@@ -16,11 +16,11 @@
 //!
 //! Said: `Ks` not zero (and then `Ns`), `illum` 3–10 (reflection, glass, refraction, shadow matte), `d`
 //! below 1 or `Tr` above 0 (transparency), `Ni` and `Tf` where the material transmits, PBR extensions not
-//! zero, and every other statement: texture maps but `map_Kd` and `map_d` (`map_*`, `bump`, `disp`, `decal`, `refl`, `norm`) and
-//! statements of no kind known here.
+//! zero, and every other statement: texture maps but `map_Kd`, `map_Ke` and `map_d` (`map_*`, `bump`,
+//! `disp`, `decal`, `refl`, `norm`) and statements of no kind known here.
 
 /// Statements read by the renderer, or harmless whatever their value.
-const USED_OR_HARMLESS: &[&str] = &["newmtl", "Kd", "Ke", "Ka", "map_Kd", "map_d"];
+const USED_OR_HARMLESS: &[&str] = &["newmtl", "Kd", "Ke", "Ka", "map_Kd", "map_Ke", "map_d"];
 /// The PBR extension's scalars: harmless at zero.
 const PBR_SCALARS: &[&str] = &["Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor"];
 /// `illum` models that transmit light through the surface.
@@ -146,7 +146,7 @@ mod tests {
     fn mirrors_glass_and_maps_are_said_once_per_material() {
         let text = "newmtl glass\nKd 0.1 0.1 0.1\nNi 1.5\nTf 0.9 0.9 0.9\nillum 7\nillum 7\n\
                     newmtl mirror\nKs 0.9 0.9 0.9\nNs 200\nillum 3\n\
-                    newmtl wood\nKd 0.5 0.3 0.1\nmap_Kd wood.png\nbump wood_n.png\nmap_Ke glow.png\nbump wood2.png\n\
+                    newmtl wood\nKd 0.5 0.3 0.1\nmap_Kd wood.png\nbump wood_n.png\nmap_Ks shine.png\nbump wood2.png\n\
                     newmtl veil\nd 0.4\nNi 1.33\n\
                     newmtl metal\nPm 1\nPr 0.2\n";
         assert_eq!(
@@ -154,7 +154,7 @@ mod tests {
             [
                 "materials.mtl: material 'glass': Ni, Tf, illum 7 ignored (treated as diffuse)",
                 "materials.mtl: material 'mirror': Ks, Ns, illum 3 ignored (treated as diffuse)",
-                "materials.mtl: material 'wood': bump, map_Ke ignored (treated as diffuse)",
+                "materials.mtl: material 'wood': bump, map_Ks ignored (treated as diffuse)",
                 "materials.mtl: material 'veil': Ni, d ignored (treated as diffuse)",
                 "materials.mtl: material 'metal': Pm, Pr ignored (treated as diffuse)",
             ]

@@ -2,6 +2,8 @@
 //! square on screen, times its `Ke` and the share of it nothing hides. An emitter is hundreds of times
 //! brighter than what it lights (17 against 0.03 on the Cornell box's ceiling), so a pixel on its rim that
 //! samples its coverage in steps of 1/SAMPLES is tens of percent off; the clipped area has no such step.
+//! An emission-textured triangle's part in the square emits its texture's mean over that part, taken at
+//! points spread over it on screen and carried back onto the triangle.
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -14,14 +16,17 @@ pub struct ScreenEmitter {
     /// Vertices in continuous pixel coordinates.
     v: [Vec2; 3],
     surface: SurfaceId,
-    ke: Vec3,
+    /// Its index in the mesh.
+    triangle: usize,
+    /// Its radiance, where constant (no emission texture).
+    ke: Option<Vec3>,
 }
 
 /// The emitter triangles whose front faces the camera at `eye`, on screen; and the emitting surfaces that
 /// could not be projected (a vertex behind the camera), whose light the samples measure instead.
 pub fn screen_emitters(scene: &Scene, size: ImageSize) -> (Vec<ScreenEmitter>, Vec<SurfaceId>) {
     let (mut emitters, mut sampled) = (Vec::new(), Vec::new());
-    for t in &scene.mesh.triangles {
+    for (i, t) in scene.mesh.triangles.iter().enumerate() {
         let material = scene.mesh.material_of(t.surface);
         if !material.is_emitter() || (scene.camera.eye - t.v[0]).dot(t.normal) <= 0.0 {
             continue;
@@ -29,7 +34,12 @@ pub fn screen_emitters(scene: &Scene, size: ImageSize) -> (Vec<ScreenEmitter>, V
         let projected: Option<Vec<Vec2>> =
             t.v.iter().map(|&v| scene.camera.project(v, size.width, size.height)).collect();
         match projected {
-            Some(p) => emitters.push(ScreenEmitter { v: [p[0], p[1], p[2]], surface: t.surface, ke: material.ke }),
+            Some(p) => emitters.push(ScreenEmitter {
+                v: [p[0], p[1], p[2]],
+                surface: t.surface,
+                triangle: i,
+                ke: (!scene.mesh.emits_textured(i)).then_some(material.ke),
+            }),
             None => sampled.push(t.surface),
         }
     }
@@ -72,10 +82,34 @@ pub fn emitted(
             let meets = |k: &&usize| surface[**k] == e.surface && emission[**k].truncate() != Vec3::ZERO;
             inside.iter().filter(meets).count() as f32 / inside.len() as f32
         };
-        sum += e.ke * area * seen;
+        let radiance = e.ke.unwrap_or_else(|| mean_radiance((scene, size), e.triangle, &part));
+        sum += radiance * area * seen;
     }
     let on_sampled = (0..surface.len()).filter(|&k| sampled.contains(&surface[k]));
     sum + on_sampled.map(|k| emission[k].truncate()).sum::<Vec3>() / surface.len().max(1) as f32
+}
+
+/// The mean radiance emission-textured triangle `triangle` emits over `part`, a convex polygon of its
+/// projection on screen: its fan triangles' [`crate::scene::subdivision`] centroids, 16 each, carried back
+/// onto the triangle's plane along their camera rays, weighed by the fan triangles' areas.
+fn mean_radiance((scene, size): (&Scene, ImageSize), triangle: usize, part: &[Vec2]) -> Vec3 {
+    let t = &scene.mesh.triangles[triangle];
+    let (mut sum, mut area) = (Vec3::ZERO, 0.0);
+    for k in 1..part.len().saturating_sub(1) {
+        let fan = [part[0], part[k], part[k + 1]];
+        let fan_area = polygon_area(&fan);
+        let points: Vec<Vec2> = crate::scene::subdivision(4)
+            .map(|b| crate::scene::at_barycentric(&fan, (b[0] + b[1] + b[2]) / 3.0))
+            .collect();
+        for s in &points {
+            let ray = scene.camera.ray(s.x, s.y, size.width, size.height);
+            let along = (t.v[0] - ray.origin).dot(t.normal) / ray.dir.dot(t.normal);
+            let at = if along.is_finite() { ray.at(along) } else { t.v[0] };
+            sum += scene.mesh.emission_at(triangle, at) * (fan_area / points.len() as f32);
+        }
+        area += fan_area;
+    }
+    if area > 0.0 { sum / area } else { scene.mesh.mean_emission(triangle) }
 }
 
 /// The convex polygon `square` clipped to the triangle `t` (Sutherland–Hodgman; either winding).

@@ -42,10 +42,8 @@ pub fn plane(y: f32, n: usize) -> Vec<[Vec3; 3]> {
 
 /// A sphere (surface 1), a finely tessellated floor (surface 2) and a finely tessellated emitter (surface 3).
 pub fn scene() -> Mesh {
-    let materials = vec![
-        Material { name: "grey".into(), kd: Vec3::splat(0.5), ke: Vec3::ZERO, kd_map: None, cutout: None },
-        Material { name: "lamp".into(), kd: Vec3::ZERO, ke: Vec3::ONE, kd_map: None, cutout: None },
-    ];
+    let materials =
+        vec![Material::new("grey", Vec3::splat(0.5), Vec3::ZERO), Material::new("lamp", Vec3::ZERO, Vec3::ONE)];
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down
     let groups = [

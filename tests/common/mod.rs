@@ -79,7 +79,7 @@ use sensorlight::sensors::SensorKind;
 use sensorlight::strategy::StrategyKind;
 
 pub fn material(name: &str, kd: f32, ke: f32) -> Material {
-    Material { name: name.into(), kd: Vec3::splat(kd), ke: Vec3::splat(ke), kd_map: None, cutout: None }
+    Material::new(name, Vec3::splat(kd), Vec3::splat(ke))
 }
 
 /// A scene built in code: `groups` are (name, material index, triangles).
