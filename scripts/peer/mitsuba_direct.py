@@ -60,7 +60,8 @@ How each convention is matched
   rows from pole to pole (row j at v = j/(H−1)) where sensorlight's are texel centres (v = (j+½)/H):
   the script hands Mitsuba the map resampled to 2H + 1 rows at v = j/2H, on which Mitsuba's linear
   interpolation is sensorlight's exactly (every kink of sensorlight's bilinear function is a row).
-* Emitters: a material with any Ke component > 0 gets an `area` emitter of radiance Ke (linear RGB).
+* Emitters: a material with any Ke component > 0 gets an `area` emitter of radiance Ke (linear RGB); with
+  a `map_Ke`, Ke (1 when the material gives none) times that texture, read as `map_Kd` is.
   Mitsuba's area emitter is one-sided: it emits only towards the side its geometric normal points to,
   i.e. the counter-clockwise front, sensorlight's convention.
 * Colour: the `*_rgb` variants render linear RGB with no spectral upsampling, so Kd and Ke are used as
@@ -125,8 +126,9 @@ class SceneError(Exception):
 class Material:
     name: str
     kd: tuple[float, float, float] | None = None
-    ke: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ke: tuple[float, float, float] | None = None
     kd_map: Path | None = None
+    ke_map: Path | None = None
     d_map: Path | None = None
 
     @property
@@ -137,8 +139,15 @@ class Material:
         return (1.0, 1.0, 1.0) if self.kd_map is not None else (DEFAULT_KD,) * 3
 
     @property
+    def emission(self) -> tuple[float, float, float]:
+        """Ke: as given; without one, 1 under a `map_Ke` and 0 otherwise (sensorlight's)."""
+        if self.ke is not None:
+            return self.ke
+        return (1.0, 1.0, 1.0) if self.ke_map is not None else (0.0, 0.0, 0.0)
+
+    @property
     def is_emitter(self) -> bool:
-        return max(self.ke) > 0.0
+        return max(self.emission) > 0.0
 
 
 @dataclass
@@ -188,10 +197,10 @@ def load_mtl(path: Path, materials: dict[str, Material]) -> None:
                 current.kd = tuple(values)
             else:
                 current.ke = tuple(values)
-        elif key in ("map_Kd", "map_d") and current is not None and args:
+        elif key in ("map_Kd", "map_Ke", "map_d") and current is not None and args:
             image = path.parent / args[-1]  # options before the name are not read (as sensorlight)
             if image.is_file():
-                setattr(current, "kd_map" if key == "map_Kd" else "d_map", image)
+                setattr(current, {"map_Kd": "kd_map", "map_Ke": "ke_map", "map_d": "d_map"}[key], image)
 
 
 def find_mtl(obj_dir: Path, name: str, mesh: Mesh) -> Path | None:
@@ -430,7 +439,8 @@ def sun_disc(direction, irradiance, diameter_deg, lo, hi):
 
 
 def colour_texture(path: Path, kd):
-    """`path` (sRGB) as linear RGB times `kd`: a raw, repeating, bilinear Mitsuba bitmap texture."""
+    """`path` (sRGB) as linear RGB times `kd` (an albedo or a radiance): a raw, repeating, bilinear Mitsuba
+    bitmap texture."""
     import mitsuba as mi
     import numpy as np
 
@@ -485,7 +495,8 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
         given = spec.mesh.normals.get(name, [])
         smooth = any(n is not None for n in given)
         corner_uvs = spec.mesh.uvs.get(name, [])
-        textured = (material.kd_map or material.d_map) is not None and all(uv is not None for uv in corner_uvs)
+        maps = (material.kd_map, material.ke_map, material.d_map)
+        textured = any(m is not None for m in maps) and all(uv is not None for uv in corner_uvs)
         props = mi.Properties()
         props["face_normals"] = not smooth
         reflectance = colour_texture(material.kd_map, kd) if textured and material.kd_map else {"type": "rgb", "value": list(kd)}
@@ -497,7 +508,9 @@ def build_scene(spec: SceneSpec, spp: int, seed: int, integrator: dict):
             )
         props["bsdf"] = mi.load_dict(bsdf)
         if material.is_emitter:
-            props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": list(material.ke)}})
+            ke = material.emission
+            radiance = colour_texture(material.ke_map, ke) if textured and material.ke_map else {"type": "rgb", "value": list(ke)}
+            props["emitter"] = mi.load_dict({"type": "area", "radiance": radiance})
         shape = mi.Mesh(
             f"m{k}_{material.name}",
             vertex_count=len(positions),
