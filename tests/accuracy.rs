@@ -11,7 +11,7 @@ use glam::Vec4;
 use sensorlight::output::compare::{Agreement, Picture, agreement};
 use sensorlight::params::{EstimatorKind, Indirect};
 use sensorlight::reference::integrator::Integrator;
-use sensorlight::renderer::{CacheConfig, Quiet, Renderer};
+use sensorlight::renderer::{Quiet, Renderer};
 use sensorlight::scene::{ImageSize, Scene};
 use sensorlight::sensors::SensorKind;
 
@@ -75,7 +75,7 @@ fn defaults(scene_file: &str) -> common::Setup {
     let scene = Scene::load(&path).unwrap();
     let table = sensorlight::params::Overrides::from_scene_table(&path, &scene.render).unwrap();
     let p = sensorlight::params::RenderParams::resolve(Some((&path, &table)), &Default::default()).unwrap();
-    common::Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: CacheConfig::for_params(&p) }
+    common::Setup::of(&p)
 }
 
 fn within_one_percent(a: &Agreement) {

@@ -134,7 +134,7 @@ fn thin_bars_and_a_light_seen_edge_on_within_three_percent() {
 /// The program's defaults with direct light only (ε = 0) and `aa`.
 fn direct_defaults(aa: Antialiasing) -> common::Setup {
     let p = RenderParams::resolve(None, &Overrides { epsilon: Some(0.0), aa: Some(aa), ..Default::default() }).unwrap();
-    common::Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache: None }
+    common::Setup::of(&p)
 }
 
 /// What is supersampled: the outlines of the occluder and the light and the shadow's edges, and nothing

@@ -755,10 +755,8 @@ mod tests {
                 assert!((area(p) - 0.5 / (k * k) as f32).abs() < 1e-6, "k {k}: {p:?} is not k² times smaller");
                 assert!(p.iter().all(|b| b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6), "{p:?} outside");
             }
-            let mut centroids: Vec<(i32, i32)> = parts
-                .iter()
-                .map(|p| ((p[0] + p[1] + p[2]) * 1000.0 / 3.0).round().as_ivec2().into())
-                .collect();
+            let mut centroids: Vec<(i32, i32)> =
+                parts.iter().map(|p| ((p[0] + p[1] + p[2]) * 1000.0 / 3.0).round().as_ivec2().into()).collect();
             centroids.sort_unstable();
             centroids.dedup();
             assert_eq!(centroids.len(), k * k, "k {k}: parts overlap");

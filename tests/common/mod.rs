@@ -69,7 +69,9 @@ pub fn project(path: &str) -> PathBuf {
 
 use glam::{Vec3, Vec4};
 use sensorlight::output::compare::{Comparison, Picture, compare};
-use sensorlight::params::{Antialiasing, EstimatorParams, FrameParams, Indirect, Overrides, RenderParams};
+use sensorlight::params::{
+    Antialiasing, EstimatorKind, EstimatorParams, FrameParams, Indirect, Overrides, RenderParams,
+};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{CacheConfig, Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
@@ -188,6 +190,7 @@ pub fn lightbox(size: (u32, u32)) -> Scene {
 /// What a test renders with: the estimator, the sensor map size and the per-render parameters.
 #[derive(Clone, Copy, Debug)]
 pub struct Setup {
+    pub kind: EstimatorKind,
     pub estimator: EstimatorParams,
     pub rd: u32,
     pub frame: FrameParams,
@@ -195,9 +198,19 @@ pub struct Setup {
     pub cache: Option<CacheConfig>,
 }
 
-/// Parameters that sense every pixel and do not filter: the GPU's R at every pixel, as sensed.
+impl Setup {
+    /// What `sensorlight render` renders with at the resolved parameters `p`.
+    pub fn of(p: &RenderParams) -> Self {
+        let cache = CacheConfig::for_params(p);
+        Self { kind: p.estimator_kind, estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache }
+    }
+}
+
+/// Parameters that sense every pixel and do not filter (the exact estimator): the GPU's R at every pixel,
+/// as sensed.
 pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
     Setup {
+        kind: EstimatorKind::Exact,
         estimator: EstimatorParams { sensor, indirect: Indirect::Epsilon(epsilon), background: Vec3::ZERO },
         rd,
         frame: FrameParams::every_pixel(Indirect::Epsilon(epsilon), Vec3::ZERO),
@@ -209,6 +222,7 @@ pub fn every_pixel(sensor: SensorKind, rd: u32, epsilon: f32) -> Setup {
 pub fn render(scene: &Scene, setup: &Setup, budget: Option<u64>) -> RenderOutput {
     gpu(|device| {
         let mut renderer = Renderer::builder(device, scene, setup.estimator.sensor, setup.rd)
+            .estimator(setup.kind)
             .memory_budget(budget)
             .radiance_cache(setup.cache)
             .build_unchecked(StrategyKind::default())
@@ -245,9 +259,7 @@ pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u3
     };
     [Antialiasing::On, Antialiasing::Off].map(|aa| {
         let p = params(aa);
-        let cache = CacheConfig::for_params(&p);
-        let setup = Setup { estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache };
-        let out = render(scene, &setup, None);
+        let out = render(scene, &Setup::of(&p), None);
         let reference = picture("oracle", &oracle.image, Some(&oracle.image_std_error));
         let c = compare(&picture("render", &out.image, None), &reference).unwrap();
         eprintln!(
