@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, ensure};
+use anyhow::{Context as _, Result, ensure};
 use clap::Args;
 use glam::Vec3;
 use sensorlight::params::{
@@ -156,7 +156,7 @@ impl LightFlags {
         let strength = self.sky_strength.or(scene.sky.as_ref().map(|s| s.strength)).unwrap_or(1.0);
         let rotation = self.sky_rotation.or(scene.sky.as_ref().map(|s| s.rotation_deg)).unwrap_or(0.0);
         let sky = SkyMap::load(&path, strength).and_then(|sky| sky.turned(rotation));
-        scene.set_sky(sky.map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?);
+        scene.set_sky(sky.map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?).context("--sky")?;
         Ok(())
     }
 }

@@ -138,6 +138,9 @@ fn load_input(
             let mut scene = Scene::load(path)?;
             lights.apply(&mut scene)?;
             warn_all(&scene.warnings);
+            if say::normal() {
+                scene.notes.iter().for_each(|note| sensorlight::errln!("note: {note}"));
+            }
             resolve(scene, flags)
         }
         FileKind::ObjMesh | FileKind::GltfMesh => {

@@ -11,6 +11,7 @@ pub mod kind;
 pub mod obj;
 pub mod ray;
 pub mod sky;
+mod sky_sun;
 pub mod sun;
 pub mod surfaces;
 pub mod texture;
@@ -480,7 +481,7 @@ impl Scene {
                 let sky = SkyMap::load(&map, s.strength.unwrap_or(1.0))
                     .and_then(|sky| sky.turned(s.rotation_deg.unwrap_or(0.0)))
                     .with_context(|| format!("{}: [sky]", path.display()))?;
-                Some(Arc::new(sky))
+                Some(sky)
             }
             None => None,
         };
@@ -491,26 +492,26 @@ impl Scene {
             mesh.add_sun(sun);
         }
         warnings.extend(mesh.lighting_warnings());
-        if sky.is_some() {
-            warnings.retain(|w| w != Mesh::NO_EMITTER);
-        }
         let mut inputs = vec![path.to_owned()];
         inputs.extend(obj.files);
-        inputs.extend(sky.as_ref().map(|s| PathBuf::from(&s.name)));
         let mesh_file = Some(mesh_path);
-        Ok(Self {
+        let mut scene = Self {
             path: path.to_owned(),
             mesh,
             camera,
             image,
             render: file.render,
             sun,
-            sky,
+            sky: None,
             warnings,
             notes: Vec::new(),
             inputs,
             mesh_file,
-        })
+        };
+        if let Some(sky) = sky {
+            scene.set_sky(sky).with_context(|| format!("{}: [sky]", path.display()))?;
+        }
+        Ok(scene)
     }
 }
 
@@ -662,14 +663,48 @@ impl Scene {
 
     /// Lights the scene with the environment map `sky` (in place of its own, if any): rays that leave the
     /// scene see it instead of the constant background. Its file joins the inputs no output may overwrite.
-    pub fn set_sky(&mut self, sky: SkyMap) {
-        if let Some(old) = &self.sky {
-            let old = PathBuf::from(&old.name);
-            self.inputs.retain(|p| *p != old);
+    ///
+    /// A sun painted into the map is taken out of it and drawn as the scene's sun (`scene::sky_sun`), unless
+    /// the scene has a sun of its own: then the map's stays in the map, said. A sun taken out of the map
+    /// this one replaces goes with it.
+    pub fn set_sky(&mut self, sky: SkyMap) -> Result<()> {
+        if let Some(old) = self.sky.take() {
+            let old_path = PathBuf::from(&old.name);
+            self.inputs.retain(|p| *p != old_path);
+            if old.taken_sun.is_some() && old.taken_sun == self.sun {
+                self.mesh.remove_sun();
+                self.sun = None;
+            }
+        }
+        let sky = match self.sun {
+            None => sky.without_sun()?,
+            Some(_) => {
+                if let Some((painted, _)) = sky.painted_sun()? {
+                    self.warnings.push(format!(
+                        "sky map {} holds a sun ({:.2}° wide, irradiance {:.3}) but the scene has a sun of its own: \
+                         the map's stays in the map, where the sensors blur it; give the scene no [sun] to have it \
+                         drawn as the sun",
+                        sky.name,
+                        painted.angular_diameter_deg,
+                        painted.irradiance.max_element()
+                    ));
+                }
+                sky
+            }
+        };
+        if let Some(sun) = sky.taken_sun {
+            let d = sun.direction;
+            self.notes.push(format!(
+                "sky map {}: its sun ({:.2}° wide, towards ({:.3}, {:.3}, {:.3}), irradiance {:.3} {:.3} {:.3}) is \
+                 drawn as the scene's sun, the map around it keeping the sky",
+                sky.name, sun.angular_diameter_deg, d.x, d.y, d.z, sun.irradiance.x, sun.irradiance.y, sun.irradiance.z
+            ));
+            self.set_sun(sun);
         }
         self.inputs.push(PathBuf::from(&sky.name));
         self.sky = Some(Arc::new(sky));
         self.warnings.retain(|w| w != Mesh::NO_EMITTER);
+        Ok(())
     }
 
     /// This scene as a TOML scene file to be written at `toml_path`: the mesh relative to that file's
@@ -708,7 +743,9 @@ impl Scene {
         doc.insert("mesh".into(), toml::Value::String(mesh.to_owned()));
         doc.insert("camera".into(), toml::Value::Table(camera));
         doc.insert("image".into(), toml::Value::Table(image));
-        if let Some(sun) = &self.sun {
+        // A sun taken out of the sky map is the map's: written as a [sun], it would keep the map's in the map.
+        let from_sky = self.sky.as_ref().is_some_and(|s| s.taken_sun.is_some() && s.taken_sun == self.sun);
+        if let Some(sun) = self.sun.as_ref().filter(|_| !from_sky) {
             let mut table = toml::Table::new();
             table.insert("direction".into(), vec(sun.direction));
             table.insert("irradiance".into(), vec(sun.irradiance));

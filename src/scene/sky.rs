@@ -59,6 +59,8 @@ pub struct SkyMap {
     turn: (f32, f32),
     /// Level 0 first, each half the previous (rounded down, at least 1) down to 1 × 1.
     pub levels: Vec<SkyLevel>,
+    /// The sun taken out of the map ([`SkyMap::without_sun`]), which the scene draws as its sun.
+    pub taken_sun: Option<super::Sun>,
     /// Cumulative sums for sampling: each row's total (`marginal`), and each row's texels (`conditional`).
     marginal: Vec<f32>,
     conditional: Vec<f32>,
@@ -95,7 +97,17 @@ impl SkyMap {
             levels.push(downsample(last));
         }
         let (marginal, conditional) = distribution(&levels[0]);
-        Ok(Self { name: name.to_owned(), strength, rotation_deg: 0.0, turn: (0.0, 1.0), levels, marginal, conditional })
+        let turn = (0.0, 1.0);
+        Ok(Self {
+            name: name.to_owned(),
+            strength,
+            rotation_deg: 0.0,
+            turn,
+            levels,
+            taken_sun: None,
+            marginal,
+            conditional,
+        })
     }
 
     /// The map turned about +y by `degrees` (module docs).
@@ -117,7 +129,7 @@ impl SkyMap {
     }
 
     /// The world direction for the map's direction `m`: `R_y(angle)·m`.
-    fn to_world(&self, m: Vec3) -> Vec3 {
+    pub(super) fn to_world(&self, m: Vec3) -> Vec3 {
         let (sin, cos) = self.turn;
         Vec3::new(cos * m.x + sin * m.z, m.y, -sin * m.x + cos * m.z)
     }

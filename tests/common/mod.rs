@@ -241,13 +241,24 @@ pub fn against_the_area_oracle(scene: &Scene, epsilon: f32, samples: u32) -> [Co
 /// [`against_the_area_oracle`] with the parameters `flags` set (e.g. a background), `--aa` aside; with
 /// global illumination (no ε in `flags`), the render's radiance cache and the oracle's paths.
 pub fn against_the_area_oracle_with(scene: &Scene, flags: Overrides, samples: u32) -> [Comparison; 2] {
+    against_the_area_oracle_of(scene, scene, flags, samples)
+}
+
+/// [`against_the_area_oracle_with`], the oracle rendering `oracle_scene` (the same scene as the user gave it,
+/// where the renderer's differs by an approximation being measured).
+pub fn against_the_area_oracle_of(
+    scene: &Scene,
+    oracle_scene: &Scene,
+    flags: Overrides,
+    samples: u32,
+) -> [Comparison; 2] {
     let params = |aa| {
         let flags = Overrides { aa: Some(aa), ..flags.clone() };
         RenderParams::resolve(None, &flags).unwrap()
     };
     let p = params(Antialiasing::On);
     let oracle =
-        Integrator::new(scene, p.estimator, samples, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
+        Integrator::new(oracle_scene, p.estimator, samples, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
     let picture = |name: &str, rgb: &[Vec4], noise: Option<&[Vec4]>| Picture {
         name: name.into(),
         width: scene.image.width as usize,
