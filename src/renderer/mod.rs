@@ -8,6 +8,7 @@
 //! [`FrameParams`].
 
 mod batch;
+pub mod detail;
 mod gi;
 mod probe;
 mod resolve;
@@ -121,10 +122,10 @@ impl Progress for Quiet {}
 pub const DEFAULT_IN_FLIGHT: u32 = 2;
 
 /// Meshes of at least this many triangles are drawn into the sensor maps from their clusters, culled and
-/// at the level of detail each view needs ([`Detail::Auto`]); smaller ones at full detail, bit for bit as
-/// before (every shipped scene has under 300). On lavapipe the two cost the same per sensor at a few hundred
-/// triangles and clusters are 9× faster at 2 000 (docs/BENCHMARKS.md "Large meshes"); a GPU draws small
-/// meshes cheaper, hence the margin.
+/// at the level of detail each view needs ([`Detail::Auto`]): full detail costs per sensor in proportion to
+/// the triangles (on lavapipe 36× the Cornell box at 10 000, the clusters 1.6×: docs/BENCHMARKS.md "Large
+/// meshes"), too much to measure against. Smaller meshes from [`detail::DETAIL_PROBE_MIN_TRIANGLES`] are
+/// drawn whichever way measures faster on the device ([`detail`]); smaller ones still at full detail.
 pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
 
 /// How finely the sensor maps draw the scene (docs/DESIGN.md §9). The camera's G-buffer and the emitters
@@ -132,7 +133,8 @@ pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Detail {
-    /// Clusters from [`CLUSTER_MIN_TRIANGLES`] triangles on, where the device can draw them.
+    /// Clusters from [`CLUSTER_MIN_TRIANGLES`] triangles on, where the device can draw them; from
+    /// [`detail::DETAIL_PROBE_MIN_TRIANGLES`], where they measure faster ([`detail`]).
     #[default]
     Auto,
     /// Every view draws every triangle.
@@ -293,8 +295,11 @@ impl<'a> RendererBuilder<'a> {
             let (sensor, rd) = (config.sensor, config.sensor_size);
             strategy::choose(&mut prober, sensor, config.estimator, rd, budget, config.strategy, cache, events)?
         };
+        let probe = detail::measure(device, scene, &config, choice.strategy, cache)?;
+        let config = RendererConfig { detail: probe.as_ref().map_or(config.detail, |p| p.detail), ..config };
         let mut renderer = Renderer::new(device, scene, config, choice)?;
         renderer.choice_time = started.elapsed();
+        renderer.detail_probe = probe;
         Ok(renderer)
     }
 
@@ -453,6 +458,8 @@ pub struct Renderer {
     /// How long building took: the strategy's self-checks and measurement (near nothing when cached), then
     /// pipelines and buffers. Not part of any render's own time.
     choice_time: Duration,
+    /// How [`Detail::Auto`] was measured for this scene, where it was ([`detail`]).
+    detail_probe: Option<detail::DetailProbe>,
     /// Whether the radiance cache holds a solution ([`Renderer::solve_cache`]).
     cache_solved: bool,
     device: Arc<Device>,
@@ -586,6 +593,7 @@ impl Renderer {
             config,
             choice,
             choice_time: Duration::ZERO,
+            detail_probe: None,
             cache_solved: false,
             device: device.clone(),
         })
@@ -603,6 +611,11 @@ impl Renderer {
     /// What the sensing since the last render or [`Renderer::sense_at`] cost (batches, times, triangles).
     pub fn batch_times(&self) -> BatchTimes {
         self.runner.times
+    }
+
+    /// How the level of detail was measured, where [`Detail::Auto`] measured it ([`detail`]).
+    pub fn detail_probe(&self) -> Option<&detail::DetailProbe> {
+        self.detail_probe.as_ref()
     }
 
     /// How the strategy was chosen.

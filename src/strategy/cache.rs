@@ -19,6 +19,9 @@ pub struct Cache {
     path: Option<PathBuf>,
     checks: BTreeMap<String, CheckResult>,
     choices: BTreeMap<String, StrategyKind>,
+    /// Whether a mesh's sensor maps are drawn from its clusters, as measured (`renderer::detail`).
+    #[serde(default)]
+    cluster_choices: BTreeMap<String, bool>,
 }
 
 impl Cache {
@@ -74,7 +77,16 @@ impl Cache {
         self.choices.insert(key, strategy);
     }
 
-    pub(super) fn save(&self) -> Result<()> {
+    /// Whether the clusters measured faster for what `key` names (`renderer::detail`), if measured.
+    pub fn cluster_choice(&self, key: &str) -> Option<bool> {
+        self.cluster_choices.get(key).copied()
+    }
+
+    pub fn record_cluster_choice(&mut self, key: String, clusters: bool) {
+        self.cluster_choices.insert(key, clusters);
+    }
+
+    pub fn save(&self) -> Result<()> {
         let Some(path) = &self.path else { return Ok(()) };
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;

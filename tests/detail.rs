@@ -1,0 +1,42 @@
+//! `Detail::Auto` measured (`renderer::detail`): a mesh of a few hundred triangles is drawn from its
+//! clusters where they sense the scene's own pixels faster and alike, at full detail otherwise; the choice is
+//! remembered; smaller meshes are not measured.
+
+mod common;
+
+use sensorlight::renderer::detail::{CLUSTER_GAIN, DETAIL_PROBE_MIN_TRIANGLES};
+use sensorlight::renderer::{CLUSTER_MIN_TRIANGLES, Detail, Renderer};
+use sensorlight::sensors::SensorKind;
+use sensorlight::strategy::{CHECK_TOLERANCE, Cache};
+
+#[test]
+fn auto_detail_is_measured_on_mid_sized_meshes_and_remembered() {
+    let scene = common::sphere_by_a_wall((32, 24));
+    let triangles = scene.mesh.triangles.len();
+    assert!((DETAIL_PROBE_MIN_TRIANGLES..CLUSTER_MIN_TRIANGLES).contains(&triangles), "{triangles}");
+    let small = common::lightbox((32, 24));
+    common::gpu(|device| {
+        let mut cache = Cache::in_memory();
+        let build = |scene, cache: &mut Cache| {
+            Renderer::builder(device, scene, SensorKind::Hemicube, 32).cache(cache).build().unwrap()
+        };
+        let first = build(&scene, &mut cache);
+        let probe = first.detail_probe().expect("a mesh of a few hundred triangles is measured").clone();
+        let (full, clusters) = probe.times.expect("measured now");
+        let difference = probe.difference.unwrap();
+        // The choice follows the rule, whichever way this machine's timings fall.
+        let faster = full.as_secs_f64() >= CLUSTER_GAIN * clusters.as_secs_f64();
+        let expected = faster && difference <= CHECK_TOLERANCE;
+        assert_eq!(probe.detail == Detail::Clusters, expected, "{probe:?}");
+        assert_eq!(first.culled(), expected, "the renderer draws as measured");
+        assert!(difference <= CHECK_TOLERANCE, "clusters of a 528-triangle sphere draw as full detail: {difference}");
+        drop(first);
+        let second = build(&scene, &mut cache);
+        let again = second.detail_probe().unwrap();
+        assert_eq!((again.detail, again.times), (probe.detail, None), "remembered, not measured again");
+        assert_eq!(second.culled(), expected);
+        drop(second);
+        let box_only = build(&small, &mut cache);
+        assert!(box_only.detail_probe().is_none() && !box_only.culled(), "a box is drawn whole, unmeasured");
+    });
+}
