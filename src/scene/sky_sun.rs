@@ -13,6 +13,8 @@
 //! mean direction, as wide as a disc of their solid angle; in the map they take the mean of the texels
 //! around them (`L_ring`), so nothing is counted twice.
 
+use std::f32::consts::PI;
+
 use anyhow::Result;
 use glam::Vec3;
 
@@ -46,13 +48,12 @@ impl SkyMap {
         // Each row's texel solid angle: 2π/w of longitude times the band's (cos θ0 − cos θ1).
         let omega: Vec<f32> = (0..h)
             .map(|j| {
-                let (t0, t1) =
-                    (std::f32::consts::PI * j as f32 / h as f32, std::f32::consts::PI * (j + 1) as f32 / h as f32);
-                2.0 * std::f32::consts::PI / w as f32 * (t0.cos() - t1.cos())
+                let (t0, t1) = (PI * j as f32 / h as f32, PI * (j + 1) as f32 / h as f32);
+                2.0 * PI / w as f32 * (t0.cos() - t1.cos())
             })
             .collect();
         let power: f32 = (0..w * h).map(|i| luminance(level.texels[i]) * omega[i / w]).sum();
-        let threshold = SUN_CONTRAST * power / (4.0 * std::f32::consts::PI);
+        let threshold = SUN_CONTRAST * power / (4.0 * PI);
         let lum = |i: usize| luminance(level.texels[i]);
         let Some(brightest) = (0..w * h).max_by(|&a, &b| lum(a).total_cmp(&lum(b))) else {
             return Ok(None);
@@ -82,8 +83,7 @@ impl SkyMap {
             }
         }
         let solid_angle: f32 = sun.iter().map(|&i| omega[i / w]).sum();
-        let diameter_deg =
-            2.0 * (1.0 - solid_angle / (2.0 * std::f32::consts::PI)).clamp(-1.0, 1.0).acos().to_degrees();
+        let diameter_deg = 2.0 * (1.0 - solid_angle / (2.0 * PI)).clamp(-1.0, 1.0).acos().to_degrees();
         if diameter_deg > Sun::MAX_DIAMETER_DEG {
             return Ok(None); // a bright region, not a sun: it stays in the map
         }
@@ -124,8 +124,8 @@ mod tests {
             (0..w * h).map(|i| if (i / w) < h / 2 { Vec3::splat(0.3) } else { Vec3::ZERO }).collect();
         let uv = direction_to_uv(d);
         let (x, y) = ((uv.x * w as f32) as u32, (uv.y * h as f32) as u32);
-        let (t0, t1) = (std::f32::consts::PI * y as f32 / h as f32, std::f32::consts::PI * (y + 1) as f32 / h as f32);
-        let omega = 2.0 * std::f32::consts::PI / w as f32 * (t0.cos() - t1.cos());
+        let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
+        let omega = 2.0 * PI / w as f32 * (t0.cos() - t1.cos());
         texels[(y * w + x) as usize] = Vec3::new(0.3 + e / omega, 0.3 + 0.9 * e / omega, 0.3 + 0.8 * e / omega);
         SkyLevel { width: w, height: h, texels }
     }
