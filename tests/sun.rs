@@ -26,6 +26,21 @@ fn courtyard(dir: &Path, size: (u32, u32), irradiance: f32, sky: f32) -> Scene {
     Scene::load(&dir.join("yard.toml")).unwrap()
 }
 
+/// The radiance cache holds the scene's own surfaces, not the sun's far disc: its size, checked against the
+/// device before it is built, is the same for a sun 0.53° and 10° wide (counting the disc, a 0.6° sun was
+/// refused as 144 MiB of cache at the default resolution).
+#[test]
+fn the_suns_disc_does_not_count_towards_the_radiance_cache() {
+    use sensorlight::gi::RadianceCache;
+    use sensorlight::scene::Sun;
+    let dir = common::scratch("sun-cache-size");
+    let mut scene = courtyard(&dir, (32, 24), 3.0, 0.0);
+    let narrow = RadianceCache::bytes_at_least(&scene.mesh, 16);
+    scene.set_sun(Sun::new(SUN, Sun::MAX_DIAMETER_DEG, Vec3::splat(3.0)).unwrap());
+    assert_eq!(RadianceCache::bytes_at_least(&scene.mesh, 16), narrow);
+    assert!(narrow < 1 << 20, "a courtyard's cache is small: {narrow} bytes");
+}
+
 /// Where the ground sees the whole sun and no wall, its radiance is `ρ·E·cosθ/π` (no sky: black
 /// background), within 0.5 %: the disc's closed form and its zoom view's visibility of 1.
 #[test]
