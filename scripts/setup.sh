@@ -68,17 +68,20 @@ backports_source() {
     done | awk -v c="$codename" '
         function wanted(s) { return s == c || s ~ /^(old)*stable$/ }
         function has_main(from,   k) { for (k = from; k <= NF; k++) if ($k == "main") return 1; return 0 }
+        # The first match is printed; the rest is read to the end, so the writer never meets a closed pipe.
+        matched { next }
         function stanza_end() {
-            if (types ~ /(^| )deb( |$)/ && enabled != "no" && components ~ /(^| )main( |$)/) {
+            if (!matched && types ~ /(^| )deb( |$)/ && enabled != "no" && components ~ /(^| )main( |$)/) {
                 n = split(suites, s, " "); split(uris, u, " ")
-                for (k = 1; k <= n; k++) if (wanted(s[k])) { print u[1], s[k], (key ~ /^\// ? "[signed-by=" key "]" : ""); exit }
+                for (k = 1; k <= n && !matched; k++)
+                    if (wanted(s[k])) { print u[1], s[k], (key ~ /^\// ? "[signed-by=" key "]" : ""); matched = 1 }
             }
             types = uris = suites = components = enabled = key = ""
         }
         $1 == "line" {
             i = 2; options = ""
             if ($2 ~ /^\[/) { while ($i !~ /\]$/ && i < NF) { options = options $i " "; i++ } options = options $i; i++ }
-            if (wanted($(i + 1)) && has_main(i + 2)) { print $i, $(i + 1), options; exit }
+            if (wanted($(i + 1)) && has_main(i + 2)) { print $i, $(i + 1), options; matched = 1 }
             next
         }
         $1 == "stanza" { stanza_end(); next }
