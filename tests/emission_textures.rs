@@ -7,7 +7,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use sensorlight::gbuffer::cast;
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::texture::decode;
@@ -99,11 +99,8 @@ fn emission_is_the_texel_and_the_parts_keep_its_mean() {
             assert!(normal.dot(t.normal) > 0.999, "a part faces as its triangle does");
         }
         // The mean radiance over the triangle, by the midpoint rule on a 64 × 64 subdivision.
-        let fine = sensorlight::scene::subdivision(64)
-            .map(|b| {
-                let c = (b[0] + b[1] + b[2]) / 3.0;
-                mesh.emission_at(i, sensorlight::scene::at_barycentric(&t.v, c))
-            })
+        let fine = sensorlight::scene::subdivision_centroids(64)
+            .map(|c| mesh.emission_at(i, sensorlight::scene::at_barycentric(&t.v, c)))
             .sum::<Vec3>()
             / (64 * 64) as f32;
         let parts_mean = parts.iter().map(|(v, ke)| *ke * triangle_area(v)).sum::<Vec3>() / area;
@@ -125,13 +122,7 @@ fn the_gbuffer_emission_is_the_textures_mean_over_the_pixel() {
     let scene = panel_room(&dir, (96, 72), &textured_panel());
     let size = scene.image;
     let (w, h) = (size.width as usize, size.height as usize);
-    let grid: Vec<Vec2> = (0..w * h)
-        .flat_map(|i| {
-            let pixel = Vec2::new((i % w) as f32, (i / w) as f32);
-            (0..16).map(move |k| pixel + (Vec2::new((k % 4) as f32, (k / 4) as f32) + 0.5) / 4.0)
-        })
-        .collect();
-    let cpu = cast::cast_points(&scene, &Bvh::build(&scene.mesh.triangles), size, &grid);
+    let cpu = cast::cast_points(&scene, &Bvh::build(&scene.mesh.triangles), size, &common::pixel_grid(size));
     let gpu = common::gpu(|device| common::raster_gbuffer(device, &scene, size).2);
     let panel = scene.mesh.triangles[panel_triangles(&scene)[0]].surface;
     let (mut compared, mut worst) = (0, 0.0f32);
@@ -208,52 +199,18 @@ fn a_gltf_emissive_texture_reads_as_map_ke_and_bad_cases_are_said() {
     let corners: [[f32; 3]; 4] = [[-0.9, 0.3, 0.4], [-0.9, 0.3, -0.4], [-0.9, 1.1, -0.4], [-0.9, 1.1, 0.4]];
     // glTF's v runs down the image, as sensorlight's does: OBJ's (u, v) is glTF's (u, 1 − v).
     let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
-    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
-    let mut bin: Vec<u8> = bytemuck::cast_slice(&corners).to_vec();
-    bin.extend_from_slice(bytemuck::cast_slice(&uvs));
-    bin.extend_from_slice(bytemuck::cast_slice(&indices));
-    bin.extend_from_slice(&[0, 0]);
-    std::fs::write(dir.join("panel.bin"), &bin).unwrap();
-    let gltf = |emissive: f32, texcoord: bool| {
-        let mut attributes = serde_json::json!({ "POSITION": 0 });
-        if texcoord {
-            attributes["TEXCOORD_0"] = serde_json::json!(1);
-        }
-        serde_json::json!({
-            "asset": { "version": "2.0" },
-            "extensionsUsed": ["KHR_materials_emissive_strength"],
-            "scene": 0,
-            "scenes": [{ "nodes": [0] }],
-            "nodes": [{ "mesh": 0 }],
-            "meshes": [{ "primitives": [{ "attributes": attributes, "indices": 2, "material": 0 }] }],
-            "materials": [{
-                "name": "panel",
-                "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
-                "emissiveFactor": [emissive, emissive, emissive],
-                "emissiveTexture": { "index": 0 },
-                "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": KE } }
-            }],
-            "textures": [{ "source": 0 }],
-            "images": [{ "uri": "glow.png" }],
-            "buffers": [{ "uri": "panel.bin", "byteLength": bin.len() }],
-            "bufferViews": [
-                { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
-                { "buffer": 0, "byteOffset": 48, "byteLength": 32 },
-                { "buffer": 0, "byteOffset": 80, "byteLength": 12 }
-            ],
-            "accessors": [
-                { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.9, 0.3, -0.4], "max": [-0.9, 1.1, 0.4] },
-                { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" },
-                { "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }
-            ]
-        })
-    };
-    let load = |doc: serde_json::Value| {
-        let path = dir.join("panel.gltf");
-        std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let load = |emissive: f32, texcoord: bool| {
+        let panel = serde_json::json!({
+            "name": "panel",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
+            "emissiveFactor": [emissive, emissive, emissive],
+            "emissiveTexture": { "index": 0 },
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": KE } }
+        });
+        let path = common::gltf::textured_quad(&dir, "panel", (corners, uvs, texcoord), panel, "glow.png");
         sensorlight::scene::gltf::load(&path).unwrap().mesh
     };
-    let data = load(gltf(1.0, true));
+    let data = load(1.0, true);
     assert!(data.warnings.is_empty(), "{:?}", data.warnings);
     let mesh = sensorlight::scene::Mesh::new(&data.groups, data.materials, data.textures, &mut Vec::new()).unwrap();
     let (gltf_bvh, obj_bvh) = (Bvh::build(&mesh.triangles), Bvh::build(&room.mesh.triangles));
@@ -267,13 +224,13 @@ fn a_gltf_emissive_texture_reads_as_map_ke_and_bad_cases_are_said() {
         assert!((a - b).abs().max_element() < 1e-4, "at {p}: glTF {a}, OBJ {b}");
     }
     // A factor of 0 lights nothing, said; a primitive without TEXCOORD_0 emits the factor alone, said.
-    let dark = load(gltf(0.0, true));
+    let dark = load(0.0, true);
     assert!(
         dark.warnings.iter().any(|w| w.contains("material 'panel'") && w.contains("emits nothing")),
         "{:?}",
         dark.warnings
     );
-    let unplaced = load(gltf(1.0, false));
+    let unplaced = load(1.0, false);
     assert!(
         unplaced.warnings.iter().any(|w| w.contains("no TEXCOORD_0") && w.contains("factors alone")),
         "{:?}",

@@ -6,7 +6,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use sensorlight::gbuffer::cast;
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::texture::decode;
@@ -140,13 +140,7 @@ fn the_gbuffer_albedo_is_the_textures_mean_over_the_pixel() {
     let size = ImageSize { width: 80, height: 60 };
     let scene = textured_room(&dir, (size.width, size.height));
     let (w, h) = (size.width as usize, size.height as usize);
-    let grid: Vec<Vec2> = (0..w * h)
-        .flat_map(|i| {
-            let pixel = Vec2::new((i % w) as f32, (i / w) as f32);
-            (0..16).map(move |k| pixel + (Vec2::new((k % 4) as f32, (k / 4) as f32) + 0.5) / 4.0)
-        })
-        .collect();
-    let cpu = cast::cast_points(&scene, &Bvh::build(&scene.mesh.triangles), size, &grid);
+    let cpu = cast::cast_points(&scene, &Bvh::build(&scene.mesh.triangles), size, &common::pixel_grid(size));
     let gpu = common::gpu(|device| common::raster_gbuffer(device, &scene, size).2);
     let textured = [surface(&scene, "floor/"), surface(&scene, "wall/")];
     let (mut compared, mut worst, mut point_worst) = (0, 0.0f32, 0.0f32);
@@ -255,35 +249,11 @@ fn a_gltf_base_colour_texture_reads_as_map_kd() {
     let room = textured_room(&dir, (32, 24));
     let corners: [[f32; 3]; 4] = [[-1.2, 0.0, 1.0], [1.2, 0.0, 1.0], [1.2, 0.0, -1.0], [-1.2, 0.0, -1.0]];
     let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [2.0, 1.0], [2.0, -1.0], [0.0, -1.0]];
-    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
-    let mut bin: Vec<u8> = bytemuck::cast_slice(&corners).to_vec();
-    bin.extend_from_slice(bytemuck::cast_slice(&uvs));
-    bin.extend_from_slice(bytemuck::cast_slice(&indices));
-    bin.extend_from_slice(&[0, 0]);
-    std::fs::write(dir.join("floor.bin"), &bin).unwrap();
-    let gltf = serde_json::json!({
-        "asset": { "version": "2.0" },
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "mesh": 0 }],
-        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "indices": 2, "material": 0 }] }],
-        "materials": [{ "name": "checker", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 } }],
-        "textures": [{ "source": 0 }],
-        "images": [{ "uri": "checker.png" }],
-        "buffers": [{ "uri": "floor.bin", "byteLength": bin.len() }],
-        "bufferViews": [
-            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
-            { "buffer": 0, "byteOffset": 48, "byteLength": 32 },
-            { "buffer": 0, "byteOffset": 80, "byteLength": 12 }
-        ],
-        "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1.2, 0.0, -1.0], "max": [1.2, 0.0, 1.0] },
-            { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" },
-            { "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }
-        ]
+    let checker = serde_json::json!({
+        "name": "checker",
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 }
     });
-    let path = dir.join("floor.gltf");
-    std::fs::write(&path, serde_json::to_string(&gltf).unwrap()).unwrap();
+    let path = common::gltf::textured_quad(&dir, "floor", (corners, uvs, true), checker.clone(), "checker.png");
     let data = sensorlight::scene::gltf::load(&path).unwrap();
     assert!(data.mesh.warnings.is_empty(), "{:?}", data.mesh.warnings);
     assert!(data.mesh.files.contains(&dir.join("checker.png")), "the texture counts as an input");
@@ -299,11 +269,11 @@ fn a_gltf_base_colour_texture_reads_as_map_kd() {
         assert!((a - b).abs().max_element() < 1e-5, "at {p}: glTF {a}, OBJ {b}");
     }
     // MASK: cut out where factor alpha × texture alpha < cutoff, the texture's alpha tested against 0.4 / 0.8.
-    let mut masked = gltf.clone();
-    masked["materials"][0]["alphaMode"] = "MASK".into();
-    masked["materials"][0]["alphaCutoff"] = 0.4.into();
-    masked["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 0.8]);
-    std::fs::write(&path, serde_json::to_string(&masked).unwrap()).unwrap();
+    let mut masked = checker;
+    masked["alphaMode"] = "MASK".into();
+    masked["alphaCutoff"] = 0.4.into();
+    masked["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 0.8]);
+    common::gltf::textured_quad(&dir, "floor", (corners, uvs, true), masked, "checker.png");
     let data = sensorlight::scene::gltf::load(&path).unwrap();
     let cutout = data.mesh.materials[0].cutout.expect("a MASK material with a texture is cut out");
     assert_eq!((cutout.map, cutout.threshold), (data.mesh.materials[0].kd_map.unwrap(), 0.5));

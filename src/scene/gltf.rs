@@ -10,8 +10,9 @@
 //!   colour texture (`Material::kd_map`, as an OBJ's `map_Kd`), its emissive factor times
 //!   `KHR_materials_emissive_strength` as `Ke` and its emissive texture (`TEXCOORD_0`) as
 //!   `Material::ke_map` (an OBJ's `map_Ke`); `alphaMode` MASK cuts a primitive out where the factor's alpha is
-//!   under the cutoff, and with a base colour texture where factor × texture alpha is (`obj::Cutout`), BLEND is drawn opaque (said); other textures, metalness and roughness are
-//!   named once per material as not used yet; the glTF default material is white (`Kd` 1);
+//!   under the cutoff, and with a base colour texture where factor × texture alpha is (`obj::Cutout`), BLEND
+//!   is drawn opaque (said); other textures, metalness and roughness are named once per material as not
+//!   used yet; the glTF default material is white (`Kd` 1);
 //! - the first camera met in the tree (perspective), as the scene's camera where the scene file names none;
 //! - `KHR_lights_punctual`: a point or spot light becomes a small emitting sphere of 8 × 16 facets
 //!   ([`LIGHT_RADIUS`] of the scene's size) whose intensity is the light's (`Ke = 4·I / A`, `A` the facets'
@@ -188,32 +189,18 @@ impl Reader<'_> {
             let [r, g, b, alpha] = pbr.base_color_factor();
             let ke = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
             let mut unused = Vec::new();
-            let kd_map = match pbr.base_color_texture() {
-                Some(info) if info.tex_coord() != 0 => {
-                    unused.push("its base colour texture (on TEXCOORD_1 or later; the factor is used)");
-                    None
-                }
-                Some(info) => self.image(&name, "base colour", info.texture().source())?,
-                None => None,
-            };
-            let ke_map = match m.emissive_texture() {
-                Some(info) if info.tex_coord() != 0 => {
-                    unused.push("its emissive texture (on TEXCOORD_1 or later; the factor is used)");
-                    None
-                }
-                Some(info) => self.image(&name, "emissive", info.texture().source())?,
-                None => None,
-            };
+            let kd_map = self.texture(&name, "base colour", pbr.base_color_texture(), &mut unused)?;
+            let ke_map = self.texture(&name, "emissive", m.emissive_texture(), &mut unused)?;
             if ke_map.is_some() && ke.max_element() <= 0.0 {
                 self.warn(format!(
                     "material '{name}': its emissive texture is multiplied by factor 0: it emits nothing"
                 ));
             }
             if pbr.metallic_factor() > 0.0 {
-                unused.push("metalness (treated as diffuse)");
+                unused.push("metalness (treated as diffuse)".into());
             }
             if m.alpha_mode() == gltf::material::AlphaMode::Blend {
-                unused.push("alpha blending (drawn opaque)");
+                unused.push("alpha blending (drawn opaque)".into());
             }
             // MASK with a texture: cut out where factor × texture alpha < cutoff (a factor under the cutoff
             // cuts the whole primitive out, in `mesh_at`).
@@ -224,7 +211,7 @@ impl Reader<'_> {
                 _ => None,
             };
             if cutout.is_some() && ke.max_element() > 0.0 {
-                unused.push("alpha mask (an emitter is not cut out)");
+                unused.push("alpha mask (an emitter is not cut out)".into());
                 cutout = None;
             }
             if !unused.is_empty() {
@@ -239,6 +226,25 @@ impl Reader<'_> {
         }
         self.mesh.materials.push(Material::new("(glTF default, white)", Vec3::ONE, Vec3::ZERO));
         Ok(())
+    }
+
+    /// Material `material`'s `what` texture `info` (base colour, emissive): its image where it is placed by
+    /// TEXCOORD_0; on a later set it is not used, said in `unused`.
+    fn texture(
+        &mut self,
+        material: &str,
+        what: &str,
+        info: Option<gltf::texture::Info>,
+        unused: &mut Vec<String>,
+    ) -> Result<Option<usize>> {
+        match info {
+            Some(info) if info.tex_coord() != 0 => {
+                unused.push(format!("its {what} texture (on TEXCOORD_1 or later; the factor is used)"));
+                Ok(None)
+            }
+            Some(info) => self.image(material, what, info.texture().source()),
+            None => Ok(None),
+        }
     }
 
     /// The texture of `image`, read once (from a buffer view, a file or a `data:` URI) for material

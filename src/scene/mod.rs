@@ -187,24 +187,24 @@ impl Mesh {
     /// material has one.
     pub fn albedo_at(&self, triangle: usize, p: Vec3) -> Vec3 {
         let material = self.material_of(self.triangles[triangle].surface);
-        match (material.kd_map, self.uvs.get(triangle)) {
-            (Some(map), Some(uvs)) => {
-                let uv = interpolate(&self.triangles[triangle].v, uvs, p);
-                material.kd * self.textures[map].sample(uv, 0.0).truncate()
-            }
-            _ => material.kd,
-        }
+        self.texel_or(material.kd, triangle, material.kd_map, p)
     }
 
     /// The radiance triangle `triangle` emits at `p` (front side): `Ke`, times its emission texture at `p`
     /// (full resolution) where the material has one.
     pub fn emission_at(&self, triangle: usize, p: Vec3) -> Vec3 {
         let material = self.material_of(self.triangles[triangle].surface);
-        match self.texture_at(triangle, material.ke_map) {
+        self.texel_or(material.ke, triangle, material.ke_map, p)
+    }
+
+    /// `factor` times texture `map`'s texel at `p` on triangle `triangle` (bilinear, full resolution), or
+    /// `factor` alone where the material names no texture or the mesh places none.
+    fn texel_or(&self, factor: Vec3, triangle: usize, map: Option<usize>, p: Vec3) -> Vec3 {
+        match self.texture_at(triangle, map) {
             Some((texture, uvs)) => {
-                material.ke * texture.sample(interpolate(&self.triangles[triangle].v, uvs, p), 0.0).truncate()
+                factor * texture.sample(interpolate(&self.triangles[triangle].v, uvs, p), 0.0).truncate()
             }
-            None => material.ke,
+            None => factor,
         }
     }
 
@@ -320,10 +320,10 @@ impl Mesh {
         let mut sums = vec![(Vec3::ZERO, 0.0f32); self.surfaces.len()];
         for (i, t) in self.triangles.iter().enumerate() {
             let material = self.material_of(t.surface);
-            let (Some(map), Some(uv)) = (material.kd_map, self.uvs.get(i)) else { continue };
+            let Some((texture, uv)) = self.texture_at(i, material.kd_map) else { continue };
             let area = triangle_area(&t.v);
             let s = &mut sums[t.surface as usize - 1];
-            s.0 += self.textures[map].mean_over(uv).truncate() * area;
+            s.0 += texture.mean_over(uv).truncate() * area;
             s.1 += area;
         }
         sums.into_iter().map(|(sum, area)| if area > 0.0 { sum / area } else { Vec3::ONE }).collect()
@@ -564,6 +564,12 @@ pub fn subdivision(k: usize) -> impl Iterator<Item = [Vec2; 3]> {
     })
 }
 
+/// The centroids of [`subdivision`]`(k)`'s parts, as barycentric coordinates: k² points spread evenly over
+/// a triangle, each standing for an equal share of its area.
+pub fn subdivision_centroids(k: usize) -> impl Iterator<Item = Vec2> {
+    subdivision(k).map(|part| (part[0] + part[1] + part[2]) / 3.0)
+}
+
 /// The barycentric coordinates of `p` (on or near the triangle `v`'s plane), each clamped to the
 /// triangle so that a point just off an edge takes the edge's.
 pub fn barycentric(v: &[Vec3; 3], p: Vec3) -> [f32; 3] {
@@ -668,13 +674,13 @@ impl Scene {
     /// the scene has a sun of its own: then the map's stays in the map, said. A sun taken out of the map
     /// this one replaces goes with it.
     pub fn set_sky(&mut self, sky: SkyMap) -> Result<()> {
+        if self.sun_from_sky() {
+            self.mesh.remove_sun();
+            self.sun = None;
+        }
         if let Some(old) = self.sky.take() {
             let old_path = PathBuf::from(&old.name);
             self.inputs.retain(|p| *p != old_path);
-            if old.taken_sun.is_some() && old.taken_sun == self.sun {
-                self.mesh.remove_sun();
-                self.sun = None;
-            }
         }
         let sky = match self.sun {
             None => sky.without_sun()?,
@@ -705,6 +711,11 @@ impl Scene {
         self.sky = Some(Arc::new(sky));
         self.warnings.retain(|w| w != Mesh::NO_EMITTER);
         Ok(())
+    }
+
+    /// Whether the scene's sun is the one taken out of its sky map ([`SkyMap::taken_sun`]).
+    fn sun_from_sky(&self) -> bool {
+        self.sky.as_ref().is_some_and(|s| s.taken_sun.is_some() && s.taken_sun == self.sun)
     }
 
     /// This scene as a TOML scene file to be written at `toml_path`: the mesh relative to that file's
@@ -744,8 +755,7 @@ impl Scene {
         doc.insert("camera".into(), toml::Value::Table(camera));
         doc.insert("image".into(), toml::Value::Table(image));
         // A sun taken out of the sky map is the map's: written as a [sun], it would keep the map's in the map.
-        let from_sky = self.sky.as_ref().is_some_and(|s| s.taken_sun.is_some() && s.taken_sun == self.sun);
-        if let Some(sun) = self.sun.as_ref().filter(|_| !from_sky) {
+        if let Some(sun) = self.sun.as_ref().filter(|_| !self.sun_from_sky()) {
             let mut table = toml::Table::new();
             table.insert("direction".into(), vec(sun.direction));
             table.insert("irradiance".into(), vec(sun.irradiance));

@@ -123,8 +123,7 @@ impl Texture {
         const N: usize = 4;
         let lod = 0.5 * (self.footprint(uv) / (N * N) as f32).max(1.0).log2();
         let mut sum = Vec4::ZERO;
-        for part in super::subdivision(N) {
-            let centroid = (part[0] + part[1] + part[2]) / 3.0;
+        for centroid in super::subdivision_centroids(N) {
             sum += self.sample(super::at_barycentric(uv, centroid), lod);
         }
         sum / (N * N) as f32

@@ -90,7 +90,7 @@ pub fn emitted(
 }
 
 /// The mean radiance emission-textured triangle `triangle` emits over `part`, a convex polygon of its
-/// projection on screen: its fan triangles' [`crate::scene::subdivision`] centroids, 16 each, carried back
+/// projection on screen: its fan triangles' [`crate::scene::subdivision_centroids`], 16 each, carried back
 /// onto the triangle's plane along their camera rays, weighed by the fan triangles' areas.
 fn mean_radiance((scene, size): (&Scene, ImageSize), triangle: usize, part: &[Vec2]) -> Vec3 {
     let t = &scene.mesh.triangles[triangle];
@@ -98,9 +98,8 @@ fn mean_radiance((scene, size): (&Scene, ImageSize), triangle: usize, part: &[Ve
     for k in 1..part.len().saturating_sub(1) {
         let fan = [part[0], part[k], part[k + 1]];
         let fan_area = polygon_area(&fan);
-        let points: Vec<Vec2> = crate::scene::subdivision(4)
-            .map(|b| crate::scene::at_barycentric(&fan, (b[0] + b[1] + b[2]) / 3.0))
-            .collect();
+        let points: Vec<Vec2> =
+            crate::scene::subdivision_centroids(4).map(|b| crate::scene::at_barycentric(&fan, b)).collect();
         for s in &points {
             let ray = scene.camera.ray(s.x, s.y, size.width, size.height);
             let along = (t.v[0] - ray.origin).dot(t.normal) / ray.dir.dot(t.normal);

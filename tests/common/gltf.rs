@@ -249,3 +249,53 @@ pub fn write_obj(dir: &Path, name: &str) -> std::path::PathBuf {
     .unwrap();
     path
 }
+
+/// A `.gltf` (written as `name.gltf` + `name.bin` in `dir`) of one quad: `corners` counter-clockwise,
+/// `uvs` its TEXCOORD_0 (left out when `texcoord` is false), drawn with `material` (its JSON) whose texture 0
+/// is the image `image` beside it. Returns its path.
+pub fn textured_quad(
+    dir: &Path,
+    name: &str,
+    (corners, uvs, texcoord): ([[f32; 3]; 4], [[f32; 2]; 4], bool),
+    material: Value,
+    image: &str,
+) -> std::path::PathBuf {
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = bytemuck::cast_slice(&corners).to_vec();
+    bin.extend_from_slice(bytemuck::cast_slice(&uvs));
+    bin.extend_from_slice(bytemuck::cast_slice(&indices));
+    bin.extend_from_slice(&[0, 0]);
+    std::fs::write(dir.join(format!("{name}.bin")), &bin).unwrap();
+    let (lo, hi) = corners
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &c| (lo.min(Vec3::from(c)), hi.max(Vec3::from(c))));
+    let mut attributes = json!({ "POSITION": 0 });
+    if texcoord {
+        attributes["TEXCOORD_0"] = json!(1);
+    }
+    let doc = json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": attributes, "indices": 2, "material": 0 }] }],
+        "materials": [material],
+        "textures": [{ "source": 0 }],
+        "images": [{ "uri": image }],
+        "buffers": [{ "uri": format!("{name}.bin"), "byteLength": bin.len() }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 32 },
+            { "buffer": 0, "byteOffset": 80, "byteLength": 12 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": lo.to_array(), "max": hi.to_array() },
+            { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" },
+            { "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }
+        ]
+    });
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    path
+}

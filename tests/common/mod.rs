@@ -182,6 +182,18 @@ pub fn raster_gbuffer(
     (gpu_scene, gbuffer, g)
 }
 
+/// 16 points in each pixel of an image of `size`, pixel by pixel: a 4 × 4 grid over its square (the
+/// G-buffer shader's grid), in continuous pixel coordinates.
+pub fn pixel_grid(size: ImageSize) -> Vec<glam::Vec2> {
+    let (w, h) = (size.width as usize, size.height as usize);
+    (0..w * h)
+        .flat_map(|i| {
+            let pixel = glam::Vec2::new((i % w) as f32, (i / w) as f32);
+            (0..16).map(move |k| pixel + (glam::Vec2::new((k % 4) as f32, (k / 4) as f32) + 0.5) / 4.0)
+        })
+        .collect()
+}
+
 /// The built-in lightbox (see `scene::builtin`) at `size`.
 pub fn lightbox(size: (u32, u32)) -> Scene {
     builtin_lightbox(ImageSize { width: size.0, height: size.1 })
