@@ -33,6 +33,7 @@ layout(std430, set = 0, binding = 24) buffer ResolvePushes { ResolvePush resolve
 layout(std430, set = 0, binding = 25) buffer SupersampledPixels { GpuSupersampledPixel supersampled_pixels[]; };
 layout(std430, set = 0, binding = 26) buffer Textures { GpuTexture textures[]; };
 layout(std430, set = 0, binding = 27) buffer Skies { GpuSky skies[]; };
+layout(std430, set = 0, binding = 28) buffer SensorComputePushes { SensorComputePush sensor_compute_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -64,4 +65,5 @@ void main() {
     supersampled_pixels[1] = supersampled_pixels[0];
     textures[1] = textures[0];
     skies[1] = skies[0];
+    sensor_compute_pushes[1] = sensor_compute_pushes[0];
 }

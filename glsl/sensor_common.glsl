@@ -1,12 +1,7 @@
 // What every sensor-map vertex shader does (paper §III-E), whatever the batching strategy: transform by
 // the view, clip at the view's planes (hemicube horizon, a frustum sensor's sides for its zoom views; an
-// emitters-only view clips everything else), and prepare both sides of the triangle (paper §III-C) so
-// that the fragment shader (sensor.frag) only picks one by gl_FrontFacing:
-//   back, or front of a non-emitter: Kd * epsilon;
-//   front of an emitter: Ke (the paper's estimator), or 0 and its light group (the exact one, whose
-//   emitter light is computed in closed form and only its visibility read from the map);
-// with global illumination (push.cache, epsilon 0) the fragment shader adds the radiance cache's reflected
-// light at the point seen, on either side.
+// emitters-only view clips everything else), and prepare both sides of the triangle (sensor_shade.glsl's
+// `sensor_sides`) so that the fragment shader (sensor.frag) only picks one by gl_FrontFacing.
 #ifndef SENSOR_COMMON_GLSL
 #define SENSOR_COMMON_GLSL
 #include "types.glsl"
@@ -22,6 +17,7 @@ layout(std430, set = 0, binding = 1) readonly buffer Surfaces { GpuSurface surfa
 layout(std430, set = 0, binding = 5) readonly buffer Uvs { vec2 uvs[]; };
 #endif
 layout(push_constant) uniform Push { SensorPush push; };
+#include "sensor_sides.glsl"
 
 layout(location = 0) flat out vec3 out_ck_front;
 layout(location = 1) flat out vec3 out_ck_back;
@@ -41,13 +37,10 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
         clip_distance[k] = dot(view.clip[k], p);
     }
     GpuSurface s = surfaces[in_surface];
-    bool emitter = s.ke.w > 0.0;
-    if ((view.flags & VIEW_EMITTERS_ONLY) != 0u && !emitter) {
+    if ((view.flags & VIEW_EMITTERS_ONLY) != 0u && s.ke.w <= 0.0) {
         clip_distance[0] = -1.0;
     }
-    out_ck_back = s.kd.rgb * push.epsilon;
-    out_ck_front = emitter ? (push.exact != 0u ? vec3(0.0) : s.ke.rgb / push.emission_scale) : out_ck_back;
-    out_group = emitter ? s.ke.w : 0.0;
+    sensor_sides(s, push, out_ck_front, out_ck_back, out_group);
     out_world = in_position;
     out_surface = in_surface;
     out_eye = view.eye.xyz;

@@ -94,6 +94,21 @@ struct SensorPush {
     uint cache;          // 1: surfaces return the radiance cache's reflected light (cache.glsl); 0: Kd * epsilon
 };
 
+// The compute strategy's push (src/passes/sensor_maps/compute.rs, sensor_compute.comp).
+struct SensorComputePush {
+    vec4 clear;          // what a texel that sees no geometry holds
+    SensorPush sensor;   // what the maps hold (first_view, layer_base unused)
+    uint rd;             // texels per side of a map layer
+    uint layers;         // layers per sensor
+    uint per_sensor;     // views per sensor in the view buffer
+    uint layer_count;    // layers of this batch: one workgroup each
+    uint triangles;      // the soup's triangles (full detail)
+    uint max_per_view;   // culled: draw-list slots per view
+    uint culled;         // 1: each view draws its culled list; 0: the whole soup
+    uint count_buffer;   // culled: each view's list length is counts[view]; 0: every slot (unused ones empty)
+    uint _pad[2];
+};
+
 // The radiance cache's grid (src/gi): the head of the table buffer, its slots after it.
 struct GpuCacheGrid {
     vec4 origin;   // w: 1 / cell size

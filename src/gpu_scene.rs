@@ -133,13 +133,13 @@ impl GpuClusters {
                 device,
                 "cluster vertices",
                 &vertices,
-                vk::BufferUsageFlags::VERTEX_BUFFER,
+                vk::BufferUsageFlags::VERTEX_BUFFER | storage, // storage: the compute strategy reads them
             )?),
             indices: Arc::new(transfer::upload(
                 device,
                 "cluster indices",
                 &hierarchy.indices,
-                vk::BufferUsageFlags::INDEX_BUFFER,
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
             )?),
             clusters: Arc::new(transfer::upload(device, "clusters", &clusters, storage)?),
             count: clusters.len() as u32,

@@ -197,6 +197,31 @@ pub struct SensorPush {
     pub cache: u32,
 }
 
+/// The compute strategy's push constants (`passes::sensor_maps::compute`, `glsl/sensor_compute.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SensorComputePush {
+    /// What a texel that sees no geometry holds (the graphics strategies' clear colour).
+    pub clear: Vec4,
+    /// What the maps hold, as for the graphics strategies (`first_view` and `layer_base` unused).
+    pub sensor: SensorPush,
+    /// Texels per side of a map layer.
+    pub rd: u32,
+    /// Layers per sensor, and views per sensor in the view buffer.
+    pub layers: u32,
+    pub per_sensor: u32,
+    /// Layers of the batch: one workgroup each.
+    pub layer_count: u32,
+    /// Full detail: the soup's triangles.
+    pub triangles: u32,
+    /// Culled (1): each view draws its own list of `max_per_view` slots, `counts[view]` of them used where
+    /// `count_buffer` is 1, else all (the unused ones empty).
+    pub max_per_view: u32,
+    pub culled: u32,
+    pub count_buffer: u32,
+    pub _pad: [u32; 2],
+}
+
 /// The radiance cache's grid and table as the sensor maps' fragment shader reads them (`gi`): the head of the
 /// table buffer, followed by its [`GpuCacheSlot`]s.
 #[repr(C)]

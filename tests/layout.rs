@@ -8,7 +8,7 @@ use sensorlight::gpu_types::{
     ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
     GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
     GpuSensorResult, GpuSensorView, GpuSky, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuTexture, GpuZoom,
-    ImagePush, ReducePush, ResolvePush, SensorPush,
+    ImagePush, ReducePush, ResolvePush, SensorComputePush, SensorPush,
 };
 use sensorlight::shaders;
 
@@ -168,6 +168,23 @@ fn shared_structs_match_glsl() {
         (24, "ResolvePush", rust_layout!(ResolvePush: width, count, samples, groups, bias, exact, _pad)),
         (26, "GpuTexture", rust_layout!(GpuTexture: offset, width, height, levels)),
         (27, "GpuSky", rust_layout!(GpuSky: width, height, levels, _pad, rotation)),
+        (
+            28,
+            "SensorComputePush",
+            rust_layout!(
+                SensorComputePush: clear,
+                sensor,
+                rd,
+                layers,
+                per_sensor,
+                layer_count,
+                triangles,
+                max_per_view,
+                culled,
+                count_buffer,
+                _pad
+            ),
+        ),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -22,6 +22,14 @@ const FRUSTUM: SensorKind = SensorKind::Frustum { fov_deg: 135.0 };
 const EXACT: EstimatorKind = EstimatorKind::Exact;
 const PAPER: EstimatorKind = EstimatorKind::Paper;
 
+/// `compute` against per-sensor on the probe: its coverage is floating point, not the hardware's snapped
+/// fixed point, so where an edge passes within the snapping's reach of a texel centre (1/512 of a texel)
+/// the two may decide that texel differently, one texel of a light being up to ~8 % of a sensor's R at rd
+/// 16. So: at most [`COMPUTE_MOVED`] of the probe's light moved between sensors, and at most one sensor in
+/// [`COMPUTE_SENSORS_PER_DIFFERENCE`] off by more than 1e-4 of its R.
+const COMPUTE_MOVED: f32 = 5e-3;
+const COMPUTE_SENSORS_PER_DIFFERENCE: usize = 10;
+
 /// 40 sensors on the built-in lightbox, in batches of 7 (full and partial batches), sensed by `kind`.
 fn probe(
     device: &Arc<Device>,
@@ -41,8 +49,10 @@ fn probe(
     renderer.sense_at(size, &pixels, &frame).unwrap().0
 }
 
-/// A strategy that passes its self-check gives per-sensor's R within float tolerance; one that fails it
-/// or cannot run is refused when asked for by name, with the reason.
+/// A strategy that passes its self-check gives per-sensor's R within float tolerance (`compute`, whose
+/// coverage is not the hardware's fixed point, as [`COMPUTE_MOVED`] says, and it must pass: it needs no
+/// graphics feature a driver may get wrong); one that fails it or cannot run is refused when asked for by
+/// name, with the reason.
 fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, estimator: EstimatorKind, rd: u32) {
     common::gpu(|device| {
         let reference = probe(device, StrategyKind::PerSensor, (sensor, estimator), rd);
@@ -60,13 +70,31 @@ fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, estimator: Est
             assert!(message.contains("cannot run") && message.contains(&why), "{kind}: {message}");
             return;
         }
-        if !renderer::self_check(device, sensor, estimator, kind).unwrap().passed {
+        let check = renderer::self_check(device, sensor, estimator, kind).unwrap();
+        assert!(
+            check.passed || kind != StrategyKind::Compute,
+            "{sensor}, {estimator}: compute fails its check: {check:?}"
+        );
+        if !check.passed {
             let message = named.err().map(|e| e.to_string()).unwrap_or_default();
             assert!(message.contains("disagrees with per-sensor"), "{kind}: {message}");
             return;
         }
         assert_eq!(named.unwrap().strategy(), kind, "a strategy that passes is used when asked for");
-        let difference = relative_difference(&probe(device, kind, (sensor, estimator), rd), &reference);
+        let r = probe(device, kind, (sensor, estimator), rd);
+        if kind == StrategyKind::Compute {
+            let total = |v: &[Vec4]| v.iter().map(|r| r.truncate().element_sum()).sum::<f32>();
+            let diffs: Vec<Vec3> = r.iter().zip(&reference).map(|(a, b)| (*a - *b).truncate().abs()).collect();
+            let moved = diffs.iter().map(|d| d.element_sum()).sum::<f32>() / total(&reference);
+            let off = diffs.iter().zip(&reference).filter(|(d, b)| d.max_element() > 1e-4 * b.max_element()).count();
+            assert!(
+                moved <= COMPUTE_MOVED && off * COMPUTE_SENSORS_PER_DIFFERENCE <= r.len(),
+                "compute, {sensor}, {estimator}, rd {rd}: {moved:.2e} of the light moved, {off} of {} sensors off",
+                r.len()
+            );
+            return;
+        }
+        let difference = relative_difference(&r, &reference);
         assert!(
             difference <= 1e-5,
             "{kind}, {sensor}, {estimator}, rd {rd}: differs from per-sensor by {difference:.2e}"
@@ -110,6 +138,13 @@ strategy_matrix! {
     atlas_frustum_exact_rd48: Atlas, FRUSTUM, EXACT, 48;
     atlas_hemicube_paper_rd16: Atlas, HEMICUBE, PAPER, 16;
     atlas_frustum_paper_rd16: Atlas, FRUSTUM, PAPER, 16;
+    compute_hemicube_exact_rd16: Compute, HEMICUBE, EXACT, 16;
+    compute_hemicube_exact_rd32: Compute, HEMICUBE, EXACT, 32;
+    compute_hemicube_exact_rd48: Compute, HEMICUBE, EXACT, 48;
+    compute_frustum_exact_rd16: Compute, FRUSTUM, EXACT, 16;
+    compute_frustum_exact_rd48: Compute, FRUSTUM, EXACT, 48;
+    compute_hemicube_paper_rd16: Compute, HEMICUBE, PAPER, 16;
+    compute_frustum_paper_rd16: Compute, FRUSTUM, PAPER, 16;
 }
 
 /// `auto` skips a strategy whose self-check failed, even where it would be the fastest, and says what it

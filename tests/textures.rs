@@ -408,6 +408,40 @@ fn sensor_maps_cut_out_alike_from_clusters_and_from_the_soup() {
     assert!(through > 1.02 * shaded, "R on the floor: {through} through the holes, {shaded} under the whole card");
 }
 
+/// The compute strategy reads textures and cut-outs as the graphics strategies do, from the soup and from
+/// the clusters (its `TEXTURES` variant: uv's steps to the next texel for the mip level, the mask before the
+/// depth test): R within one sensor texel's weight of `layered`'s at every pixel (a texel of a 16² map
+/// weighs up to ~4e-3 of a sensor: an edge through a texel centre is decided by the hardware's snapped fixed
+/// point there, by floating point here), and the light moved between pixels (Σ|ΔR| / ΣR) under 1e-3.
+#[test]
+fn the_compute_strategy_textures_and_cuts_out_as_layered() {
+    use sensorlight::params::EstimatorKind;
+    use sensorlight::renderer::{Detail, Quiet, Renderer};
+    use sensorlight::sensors::SensorKind;
+    use sensorlight::strategy::{StrategyKind, relative_difference};
+    let dir = common::scratch("cutouts-compute");
+    let scene = card_over_a_floor(&dir, (40, 30));
+    let setup = common::every_pixel(SensorKind::Hemicube, 16, 0.1);
+    common::gpu(|device| {
+        let r = |kind, detail| {
+            let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
+                .estimator(EstimatorKind::Exact)
+                .detail(detail)
+                .build_unchecked(kind)
+                .unwrap();
+            renderer.render(scene.image, &setup.frame, &Quiet).unwrap().radiance
+        };
+        for detail in [Detail::Full, Detail::Clusters] {
+            let (layered, compute) = (r(StrategyKind::Layered, detail), r(StrategyKind::Compute, detail));
+            let difference = relative_difference(&compute, &layered);
+            assert!(difference <= 4e-3, "{detail:?}: compute differs from layered by {difference:.2e}");
+            let moved = compute.iter().zip(&layered).map(|(a, b)| (a.x - b.x).abs() as f64).sum::<f64>()
+                / layered.iter().map(|b| b.x as f64).sum::<f64>();
+            assert!(moved <= 1e-3, "{detail:?}: {moved:.2e} of the light differs from layered");
+        }
+    });
+}
+
 /// A textured material's `Kd` of 1 (the texture's colour as it is, as real assets write it) reflects its
 /// texture's mean, under global illumination's cap: no warning. Scaled past the cap, it is said, with
 /// what it reflects.

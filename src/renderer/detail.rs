@@ -1,7 +1,7 @@
 //! [`Detail::Auto`] measured: for a mesh of [`DETAIL_PROBE_MIN_TRIANGLES`] to [`CLUSTER_MIN_TRIANGLES`]
 //! triangles, whether the sensor maps draw it at full detail or from its clusters (docs/DESIGN.md §9) is
-//! decided by sensing some of the scene's own pixels both ways on the device, once per device, mesh and
-//! sensor setting (remembered in the strategy cache). Which way is cheaper depends on the device: on
+//! decided by sensing some of the scene's own pixels both ways on the device, once per device, mesh,
+//! sensor setting and strategy (remembered in the strategy cache; the strategies' costs per triangle differ). Which way is cheaper depends on the device: on
 //! lavapipe the clusters cost as much as full detail at a few dozen triangles and 6× less at 2 000, a GPU
 //! draws small meshes cheaper.
 //!
@@ -58,7 +58,7 @@ pub(super) fn measure(
         return Ok(None);
     }
     let key = format!(
-        "{} | detail | {:016x} | {} {} | {}",
+        "{} | detail | {:016x} | {} {} | {} | {strategy}",
         strategy::device_key(&device.adapter),
         crate::clusters::cache::mesh_key(&scene.mesh),
         config.sensor,

@@ -36,10 +36,13 @@ pub enum StrategyKind {
     Layered,
     /// One draw per view into its tile of one large 2D image (its viewport); used only when named.
     Atlas,
+    /// A compute shader rasterizes the batch, a workgroup per map layer (no graphics pipeline).
+    Compute,
 }
 
 impl StrategyKind {
-    pub const ALL: [StrategyKind; 5] = [Self::PerSensor, Self::SingleCb, Self::Multiview, Self::Layered, Self::Atlas];
+    pub const ALL: [StrategyKind; 6] =
+        [Self::PerSensor, Self::SingleCb, Self::Multiview, Self::Layered, Self::Atlas, Self::Compute];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -48,15 +51,17 @@ impl StrategyKind {
             Self::Multiview => "multiview",
             Self::Layered => "layered",
             Self::Atlas => "atlas",
+            Self::Compute => "compute",
         }
     }
 
     /// Whether it draws every view at the origin of a target of its own, as per-sensor does, so that its
     /// maps, and R, can be per-sensor's bit for bit. The atlas draws at its tiles' offsets, whose window
     /// coordinates round differently in their last bits: a silhouette texel moves now and then (relative
-    /// RMSE of R ~1e-4 on the shipped scenes), which a probe of a few sensors need not see.
+    /// RMSE of R ~1e-4 on the shipped scenes), which a probe of a few sensors need not see; `compute`
+    /// computes coverage in floating point, not the hardware's snapped fixed point.
     pub fn rasterizes_like_per_sensor(self) -> bool {
-        self != Self::Atlas
+        !matches!(self, Self::Atlas | Self::Compute)
     }
 }
 
@@ -84,6 +89,7 @@ impl ValueEnum for StrategyRequest {
             Self::Fixed(StrategyKind::Multiview),
             Self::Fixed(StrategyKind::Layered),
             Self::Fixed(StrategyKind::Atlas),
+            Self::Fixed(StrategyKind::Compute),
         ]
     }
 

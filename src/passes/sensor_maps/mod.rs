@@ -9,6 +9,7 @@
 //! | `multiview`  | `VK_KHR_multiview`: view i of a pass draws into layer i     | `maxMultiviewViewCount`   |
 //! | `layered`    | one instanced draw, `gl_Layer` from the vertex shader       | `maxFramebufferLayers`    |
 //! | `atlas`      | one instanced draw into tiles of one 2D image (ours)        | `maxFramebufferWidth²`    |
+//! | `compute`    | a compute shader rasterizes, a workgroup per layer (ours)   | `maxImageArrayLayers`     |
 //!
 //! A strategy only *records*: the renderer's batch runner owns the batches in flight, each with its own
 //! [`SlotMaps`] (made by [`Strategy::new_slot`]), and submits them.
@@ -16,9 +17,11 @@
 //! When the scene has a cluster hierarchy (`GpuScene::clusters`), every strategy but `multiview` draws
 //! each view from its own list of indexed indirect draws ([`DrawLists`]), which the culling pass
 //! (`passes::cull`) fills before the maps are drawn; else each view draws the whole triangle soup.
-//! Shaders: `glsl/sensor_<strategy>.vert` (all include `sensor_common.glsl`) and `glsl/sensor.frag`.
+//! Shaders: `glsl/sensor_<strategy>.vert` (all include `sensor_common.glsl`) and `glsl/sensor.frag`;
+//! `glsl/sensor_compute.comp`; all shade a texel with `glsl/sensor_shade.glsl`.
 
 mod atlas;
+mod compute;
 mod layered;
 mod multiview;
 mod per_sensor;
@@ -100,7 +103,7 @@ impl Background {
     }
 
     /// The maps' clear colour: the radiance and alpha 0 (no emitter's group), or the sky map's mark.
-    fn clear_colour(&self) -> [f32; 4] {
+    pub(crate) fn clear_colour(&self) -> [f32; 4] {
         match self {
             Self::Constant(radiance) => radiance.extend(0.0).to_array(),
             Self::SkyMap => [0.0, 0.0, 0.0, -1.0],
@@ -187,6 +190,11 @@ impl StrategyDesc {
 /// Why `kind` cannot run on `device` for sensors described by `desc`, if it cannot.
 pub fn unsupported(kind: StrategyKind, device: &Device, desc: &StrategyDesc) -> Option<String> {
     let (l, f) = (&device.adapter.limits, &device.adapter.features);
+    if kind == StrategyKind::Compute {
+        return (l.max_compute_shared_memory_size < compute::SHARED_BYTES).then(|| {
+            format!("maxComputeSharedMemorySize {} < {} bytes", l.max_compute_shared_memory_size, compute::SHARED_BYTES)
+        });
+    }
     if !f.shader_clip_distance {
         return Some("no clip distances (hemicube side faces and zoom views need them)".into());
     }
@@ -240,6 +248,7 @@ pub fn create(
         StrategyKind::Multiview => Box::new(multiview::Multiview::new(device, scene, desc)?),
         StrategyKind::Layered => Box::new(layered::Layered::new(device, scene, desc)?),
         StrategyKind::Atlas => Box::new(atlas::Atlas::new(device, scene, desc)?),
+        StrategyKind::Compute => Box::new(compute::Compute::new(device, scene, desc)?),
     })
 }
 
@@ -265,8 +274,24 @@ pub struct SlotMaps {
 impl SlotMaps {
     /// Maps and depth of `width × height × layers`, all layers in `GENERAL` (the reduction binds every
     /// layer, and a smaller batch renders, and so transitions, only the first ones).
-    fn new(pipeline: &SensorPipeline, (width, height, layers): (u32, u32, u32), max_views: usize) -> Result<Self> {
-        let device = &pipeline.device;
+    fn new(pipeline: &SensorPipeline, size: (u32, u32, u32), max_views: usize) -> Result<Self> {
+        let device = &pipeline.inputs.device;
+        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 8)])?;
+        let set = pool.allocate(&pipeline.layout)?;
+        let slot = Self::with_set(&pipeline.inputs, size, max_views, (set, pool))?;
+        slot.input_writer(&pipeline.inputs).apply(device);
+        Ok(slot)
+    }
+
+    /// The maps, their views buffer and draw lists for `inputs`, with descriptor set `set` (from `pool`) that
+    /// the caller writes.
+    fn with_set(
+        inputs: &SensorInputs,
+        (width, height, layers): (u32, u32, u32),
+        max_views: usize,
+        (set, pool): (vk::DescriptorSet, DescriptorPool),
+    ) -> Result<Self> {
+        let device = &inputs.device;
         let desc = |format, usage| ImageDesc {
             format,
             width,
@@ -296,22 +321,24 @@ impl SlotMaps {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let pool = DescriptorPool::new(device, 1, &[(vk::DescriptorType::STORAGE_BUFFER, 8)])?;
-        let set = pool.allocate(&pipeline.layout)?;
-        // Texture coordinates of the vertices drawn: the clusters' where the maps are drawn from them.
-        let uvs = pipeline.culled.as_ref().map_or(&pipeline.uvs, |c| &c.uvs);
-        SetWriter::new(set)
-            .storage_buffer(0, &views)
-            .storage_buffer(1, &pipeline.surfaces)
-            .storage_buffer(2, &pipeline.cache[0])
-            .storage_buffer(3, &pipeline.cache[1])
-            .storage_buffer(4, &pipeline.cache[2])
-            .storage_buffer(5, uvs)
-            .storage_buffer(6, &pipeline.textures[0])
-            .storage_buffer(7, &pipeline.textures[1])
-            .apply(device);
-        let draws = pipeline.culled.as_ref().map(|c| DrawLists::new(device, max_views as u32, c)).transpose()?;
+        let draws = inputs.culled.as_ref().map(|c| DrawLists::new(device, max_views as u32, c)).transpose()?;
         Ok(Self { maps, depth, framebuffers: Vec::new(), partial: None, views, draws, set, _pool: pool })
+    }
+
+    /// The writes of bindings 0–7 of the slot's set, what every sensor shader reads: the views, materials,
+    /// radiance cache, texture coordinates and textures.
+    fn input_writer(&self, inputs: &SensorInputs) -> SetWriter {
+        // Texture coordinates of the vertices drawn: the clusters' where the maps are drawn from them.
+        let uvs = inputs.culled.as_ref().map_or(&inputs.uvs, |c| &c.uvs);
+        SetWriter::new(self.set)
+            .storage_buffer(0, &self.views)
+            .storage_buffer(1, &inputs.surfaces)
+            .storage_buffer(2, &inputs.cache[0])
+            .storage_buffer(3, &inputs.cache[1])
+            .storage_buffer(4, &inputs.cache[2])
+            .storage_buffer(5, uvs)
+            .storage_buffer(6, &inputs.textures[0])
+            .storage_buffer(7, &inputs.textures[1])
     }
 
     /// The views of the batch being recorded, sensor-major (`BatchViews` order), for the culling pass.
@@ -334,7 +361,7 @@ impl SlotMaps {
     ) -> Result<Framebuffer> {
         let attachments =
             vec![ImageView::layers(&self.maps, first, count)?, ImageView::layers(&self.depth, first, count)?];
-        Framebuffer::new(&pipeline.device, &pipeline.render_pass, attachments, framebuffer_layers)
+        Framebuffer::new(&pipeline.inputs.device, &pipeline.render_pass, attachments, framebuffer_layers)
     }
 
     /// A layered framebuffer over every layer.
@@ -408,12 +435,9 @@ struct Culled {
     tree: TreeShape,
 }
 
-/// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
-struct SensorPipeline {
-    // Field order is drop order.
-    pipeline: Pipeline,
-    layout: PipelineLayout,
-    render_pass: RenderPass,
+/// What every strategy draws the maps from: the scene's vertices (or clusters), materials, radiance cache
+/// and textures, and how emitters are written.
+struct SensorInputs {
     /// The scene's vertices, materials and radiance cache (the slots' descriptor sets name all but the
     /// first).
     vertices: Arc<Buffer>,
@@ -431,6 +455,54 @@ struct SensorPipeline {
     /// Drawn from the scene's clusters, view by view; `None`: the whole soup.
     culled: Option<Culled>,
     device: Arc<Device>,
+}
+
+impl SensorInputs {
+    /// `cull`: draw from the scene's clusters where it has them.
+    fn new(device: &Arc<Device>, scene: &GpuScene, desc: &StrategyDesc, cull: bool) -> Self {
+        Self {
+            vertices: scene.vertices.clone(),
+            vertex_count: scene.vertex_count,
+            surfaces: scene.surfaces.clone(),
+            cache: [scene.cache.table.clone(), scene.cache.values.clone(), scene.cache.splits.clone()],
+            textures: [scene.textures.clone(), scene.texels.clone()],
+            exact: desc.exact(),
+            emission_scale: emission_scale(scene, desc.fronts),
+            uvs: scene.uvs.clone(),
+            culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
+                vertices: c.vertices.clone(),
+                uvs: c.uvs.clone(),
+                indices: c.indices.clone(),
+                max_per_view: c.max_per_view.max(1),
+                count_buffer: device.adapter.features.draw_indirect_count,
+                tree: c.tree.clone(),
+            }),
+            device: device.clone(),
+        }
+    }
+
+    /// `push` with how emitters are written.
+    fn push(&self, push: &SensorPush) -> SensorPush {
+        SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push }
+    }
+
+    /// Bytes of draw lists and culling queue per sensor of `desc` (0 at full detail), for the batch size.
+    fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
+        let per_view = self
+            .culled
+            .as_ref()
+            .map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
+        desc.layout.views() as u64 * per_view
+    }
+}
+
+/// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
+struct SensorPipeline {
+    // Field order is drop order.
+    pipeline: Pipeline,
+    layout: PipelineLayout,
+    render_pass: RenderPass,
+    inputs: SensorInputs,
 }
 
 impl SensorPipeline {
@@ -476,37 +548,11 @@ impl SensorPipeline {
                 depth_compare: Some(DEPTH_COMPARE),
             },
         )?;
-        Ok(Self {
-            pipeline,
-            layout,
-            render_pass,
-            vertices: scene.vertices.clone(),
-            vertex_count: scene.vertex_count,
-            surfaces: scene.surfaces.clone(),
-            cache: [scene.cache.table.clone(), scene.cache.values.clone(), scene.cache.splits.clone()],
-            textures: [scene.textures.clone(), scene.texels.clone()],
-            exact: desc.exact(),
-            emission_scale: emission_scale(scene, desc.fronts),
-            uvs: scene.uvs.clone(),
-            culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
-                vertices: c.vertices.clone(),
-                uvs: c.uvs.clone(),
-                indices: c.indices.clone(),
-                max_per_view: c.max_per_view.max(1),
-                count_buffer: device.adapter.features.draw_indirect_count,
-                tree: c.tree.clone(),
-            }),
-            device: device.clone(),
-        })
+        Ok(Self { pipeline, layout, render_pass, inputs: SensorInputs::new(device, scene, desc, cull) })
     }
 
-    /// Bytes of draw lists and culling queue per sensor of `desc` (0 at full detail), for the batch size.
     fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
-        let per_view = self
-            .culled
-            .as_ref()
-            .map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
-        desc.layout.views() as u64 * per_view
+        self.inputs.draw_bytes(desc)
     }
 
     /// Begins the render pass on `framebuffer` (over `area`, or all of it) and binds the pipeline, the
@@ -521,12 +567,12 @@ impl SensorPipeline {
     ) -> RenderPassScope<'e, 'a> {
         let pass = enc.begin_render_pass(&self.render_pass, framebuffer, &SlotMaps::clears(ck.background), area);
         pass.bind(&self.pipeline, &self.layout, slot.set);
-        match &self.culled {
+        match &self.inputs.culled {
             Some(c) => {
                 pass.bind_vertices(&c.vertices);
                 pass.bind_indices(&c.indices);
             }
-            None => pass.bind_vertices(&self.vertices),
+            None => pass.bind_vertices(&self.inputs.vertices),
         }
         pass
     }
@@ -543,7 +589,7 @@ impl SensorPipeline {
         match &slot.draws {
             None => self.draw(pass, push, count, first),
             Some(d) => {
-                let push = SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push };
+                let push = self.inputs.push(push);
                 pass.push(&self.layout, &push);
                 let stride = size_of::<GpuDrawCommand>() as u64;
                 for v in first..first + count {
@@ -557,8 +603,8 @@ impl SensorPipeline {
 
     /// Draws the scene `instances` times starting at view `first_instance`.
     fn draw(&self, pass: &RenderPassScope<'_, '_>, push: &SensorPush, instances: u32, first_instance: u32) {
-        let push = SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push };
+        let push = self.inputs.push(push);
         pass.push(&self.layout, &push);
-        pass.draw(self.vertex_count, instances, 0, first_instance);
+        pass.draw(self.inputs.vertex_count, instances, 0, first_instance);
     }
 }
