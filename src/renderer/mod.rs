@@ -121,11 +121,11 @@ impl Progress for Quiet {}
 /// Batches in flight by default: one rendering while the host prepares the next.
 pub const DEFAULT_IN_FLIGHT: u32 = 2;
 
-/// Meshes of at least this many triangles are drawn into the sensor maps from their clusters, culled and
-/// at the level of detail each view needs ([`Detail::Auto`]): full detail costs per sensor in proportion to
-/// the triangles (on lavapipe 36× the Cornell box at 10 000, the clusters 1.6×: docs/BENCHMARKS.md "Large
-/// meshes"), too much to measure against. Smaller meshes from [`detail::DETAIL_PROBE_MIN_TRIANGLES`] are
-/// drawn whichever way measures faster on the device ([`detail`]); smaller ones still at full detail.
+/// Where [`Detail::Auto`] cannot measure (the camera sees nothing of the mesh), meshes of at least this many
+/// triangles are drawn from their clusters: full detail costs per sensor in proportion to the triangles
+/// (on lavapipe 36× the Cornell box at 10 000, the clusters 1.6×: docs/BENCHMARKS.md "Large meshes").
+/// Otherwise every mesh from [`detail::DETAIL_PROBE_MIN_TRIANGLES`] on is drawn whichever way measures
+/// faster on the device ([`detail`]); smaller ones at full detail.
 pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
 
 /// How finely the sensor maps draw the scene (docs/DESIGN.md §9). The camera's G-buffer and the emitters
@@ -133,8 +133,8 @@ pub const CLUSTER_MIN_TRIANGLES: usize = 5_000;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Detail {
-    /// Clusters from [`CLUSTER_MIN_TRIANGLES`] triangles on, where the device can draw them; from
-    /// [`detail::DETAIL_PROBE_MIN_TRIANGLES`], where they measure faster ([`detail`]).
+    /// Clusters where they measure faster ([`detail`]: from [`detail::DETAIL_PROBE_MIN_TRIANGLES`]
+    /// triangles on, where the device can draw them; unmeasured, from [`CLUSTER_MIN_TRIANGLES`]).
     #[default]
     Auto,
     /// Every view draws every triangle.

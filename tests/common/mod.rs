@@ -142,10 +142,15 @@ pub fn fence(size: (u32, u32)) -> Scene {
 /// A sphere of flat facets (12 stacks, 22.5° apart: one surface whose normals jump at every edge) and a box
 /// on a floor beside a wall, under a 0.5 m light: R curves across the facets and breaks at their edges.
 pub fn sphere_by_a_wall(size: (u32, u32)) -> Scene {
+    sphere_by_a_wall_of(size, 12)
+}
+
+/// [`sphere_by_a_wall`] with a sphere of `stacks` stacks (`4 · stacks · (stacks − 1)` triangles).
+pub fn sphere_by_a_wall_of(size: (u32, u32), stacks: usize) -> Scene {
     let groups = vec![
         ("floor", 0, rect(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, Vec3::Y)),
         ("wall", 0, rect(Vec3::new(0.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Y, Vec3::Z)),
-        ("sphere", 1, meshes::sphere(Vec3::new(-0.3, 0.4, -0.5), 0.4, 12)),
+        ("sphere", 1, meshes::sphere(Vec3::new(-0.3, 0.4, -0.5), 0.4, stacks)),
         ("box", 1, rect(Vec3::new(0.6, 0.3, -0.6), Vec3::X * 0.2, Vec3::Y * 0.3, Vec3::Z)),
         ("light", 2, rect(Vec3::new(0.3, 1.8, 0.2), Vec3::X * 0.25, Vec3::Z * 0.25, -Vec3::Y)),
     ];
