@@ -13,20 +13,28 @@ pub enum Reason {
     Interrupt,
     /// SIGTERM.
     Terminate,
+    /// Not wanted any more: the live viewer's camera moved, or its window closed. The viewer starts the next
+    /// render or ends; this never reaches the shell.
+    Superseded,
 }
 
 impl Reason {
-    /// The signal's number (the same on every Unix).
-    pub fn signal(self) -> i32 {
+    /// The number the flag stores: the signal's (the same on every Unix), or one no signal has.
+    fn code(self) -> i32 {
         match self {
             Reason::Interrupt => 2,
             Reason::Terminate => 15,
+            Reason::Superseded => 1000,
         }
     }
 
-    /// The shell's exit status for a program ended by this signal: 128 + its number (130, 143).
+    /// The shell's exit status for a program ended by this signal: 128 + its number (130, 143); 1 for a
+    /// render superseded.
     pub fn exit_code(self) -> u8 {
-        128 + self.signal() as u8
+        match self {
+            Reason::Superseded => 1,
+            signal => 128 + signal.code() as u8,
+        }
     }
 }
 
@@ -38,7 +46,7 @@ pub struct Cancelled(pub Reason);
 /// A flag that says whether, and why, to stop. Clones share it.
 #[derive(Clone, Debug, Default)]
 pub struct Cancel {
-    /// 0: go on; else the [`Reason::signal`] that asked to stop.
+    /// 0: go on; else the [`Reason::code`] of what asked to stop.
     signal: Arc<AtomicUsize>,
 }
 
@@ -55,7 +63,7 @@ impl Cancel {
         let cancel = Self::new();
         let armed = Arc::new(AtomicBool::new(false));
         for reason in [Reason::Interrupt, Reason::Terminate] {
-            let signal = reason.signal();
+            let signal = reason.code();
             // The shutdown first: it must see the flag as the previous signal left it.
             signal_hook::flag::register_conditional_shutdown(signal, reason.exit_code().into(), armed.clone())?;
             signal_hook::flag::register(signal, armed.clone())?;
@@ -66,14 +74,15 @@ impl Cancel {
 
     /// Asks the work to stop.
     pub fn cancel(&self, reason: Reason) {
-        self.signal.store(reason.signal() as usize, Ordering::SeqCst);
+        self.signal.store(reason.code() as usize, Ordering::SeqCst);
     }
 
     /// Whether, and why, the work should stop.
     pub fn reason(&self) -> Option<Reason> {
         match self.signal.load(Ordering::SeqCst) {
             0 => None,
-            s if s == Reason::Terminate.signal() as usize => Some(Reason::Terminate),
+            s if s == Reason::Terminate.code() as usize => Some(Reason::Terminate),
+            s if s == Reason::Superseded.code() as usize => Some(Reason::Superseded),
             _ => Some(Reason::Interrupt),
         }
     }

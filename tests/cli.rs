@@ -10,7 +10,7 @@ fn devices_lists_every_device_with_its_limits() {
     let run = common::sensorlight(&["devices"]);
     assert!(run.status.success(), "{}", common::stderr(&run));
     let stdout = String::from_utf8_lossy(&run.stdout);
-    let instance = Instance::new(false).unwrap();
+    let instance = Instance::new(false, &[]).unwrap();
     let adapters = adapter::enumerate(&instance, &sensorlight::passes::requirements()).unwrap();
     for a in &adapters {
         assert!(stdout.contains(&format!("[{}] {}", a.index, a.name)), "{} missing from:\n{stdout}", a.name);

@@ -8,7 +8,7 @@ use sensorlight::vk::adapter::{self, version_string};
 use sensorlight::vk::instance::Instance;
 
 pub fn run() -> Result<ExitCode> {
-    let instance = Instance::new(false)?;
+    let instance = Instance::new(false, &[])?;
     let adapters = adapter::enumerate(&instance, &sensorlight::passes::requirements())?;
     let chosen = adapter::select(&adapters, None).ok().map(|a| a.index);
     for a in &adapters {

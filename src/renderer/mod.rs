@@ -34,7 +34,7 @@ use crate::gi::RadianceCache;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
 use crate::light::groups::Lights;
-use crate::params::{Antialiasing, EstimatorKind, FrameParams, Param, ParamError, RenderParams};
+use crate::params::{Antialiasing, EstimatorKind, FrameParams, Indirect, Param, ParamError, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
@@ -462,6 +462,9 @@ pub struct Renderer {
     detail_probe: Option<detail::DetailProbe>,
     /// Whether the radiance cache holds a solution ([`Renderer::solve_cache`]).
     cache_solved: bool,
+    /// Where [`Renderer::keep_cache`] asked for it: the frame's light the cache was last solved for
+    /// (indirect model and background) and what solving it found.
+    kept: Option<Option<(Indirect, Vec3, GiStats)>>,
     device: Arc<Device>,
 }
 
@@ -595,6 +598,7 @@ impl Renderer {
             choice_time: Duration::ZERO,
             detail_probe: None,
             cache_solved: false,
+            kept: None,
             device: device.clone(),
         })
     }
@@ -714,12 +718,36 @@ impl Renderer {
     }
 
     /// Renders the scene at `size`.
+    /// From now on [`Renderer::render`] solves the radiance cache only when the frame's indirect model or
+    /// background differ from the last solution's (whose statistics it then reports again): the cache does
+    /// not depend on the camera, so a viewer that moves it need not pay the bounces again.
+    pub fn keep_cache(&mut self) {
+        self.kept.get_or_insert(None);
+    }
+
+    /// Looks from `camera` from the next render on (the live viewer's moves). What the renderer built does
+    /// not depend on the camera, nor does the radiance cache's solution.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
+        self.host.camera = camera;
+    }
+
     pub fn render(&mut self, size: ImageSize, frame: &FrameParams, progress: &dyn Progress) -> Result<RenderOutput> {
         let start = Instant::now();
         let device = self.device.clone();
         let pixels = size.width as usize * size.height as usize;
         // The cache first: the camera's sensors see it.
-        let gi = self.solve_cache(frame, progress)?;
+        let gi = match &self.kept {
+            Some(Some((indirect, background, stats)))
+                if self.cache_solved && *indirect == frame.indirect && *background == frame.background =>
+            {
+                Some(stats.clone())
+            }
+            _ => self.solve_cache(frame, progress)?,
+        };
+        if let (Some(kept), Some(stats)) = (&mut self.kept, &gi) {
+            *kept = Some((frame.indirect, frame.background, stats.clone()));
+        }
 
         progress.phase(Phase::GBuffer);
         let gbuffer_start = Instant::now();

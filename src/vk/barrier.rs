@@ -29,6 +29,11 @@ pub enum Access {
     TransferWrite,
     HostRead,
     HostWrite,
+    /// A swapchain image just acquired: the submission waits for its semaphore at the transfer stage, so a
+    /// layout change must wait there too, not at the top of the pipe (before the image is ours).
+    Acquired,
+    /// A swapchain image handed to the presentation engine, which waits for the submission's semaphore.
+    Present,
     /// Anything, by any stage: the coarse dependency around one-off copies and uploads.
     Any,
 }
@@ -43,8 +48,9 @@ impl Access {
             Self::ColorAttachmentWrite => S::COLOR_ATTACHMENT_OUTPUT,
             Self::DepthAttachment => S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
             Self::IndirectRead => S::DRAW_INDIRECT,
-            Self::TransferRead | Self::TransferWrite => S::TRANSFER,
+            Self::TransferRead | Self::TransferWrite | Self::Acquired => S::TRANSFER,
             Self::HostRead | Self::HostWrite => S::HOST,
+            Self::Present => S::BOTTOM_OF_PIPE,
             Self::Any => S::ALL_COMMANDS,
         }
     }
@@ -52,7 +58,7 @@ impl Access {
     fn access(self) -> vk::AccessFlags {
         use vk::AccessFlags as A;
         match self {
-            Self::Nothing => A::empty(),
+            Self::Nothing | Self::Acquired | Self::Present => A::empty(),
             Self::ComputeRead | Self::VertexShaderRead => A::SHADER_READ,
             Self::ComputeWrite => A::SHADER_READ | A::SHADER_WRITE,
             Self::ColorAttachmentWrite => A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,
@@ -117,6 +123,17 @@ pub fn image(
     enc: &Encoder<'_>,
     image: &Image,
     range: vk::ImageSubresourceRange,
+    before: (&[Access], vk::ImageLayout),
+    after: (&[Access], vk::ImageLayout),
+) {
+    raw_image(enc, image.raw, range, before, after);
+}
+
+/// [`image`] for an image this program does not own (a swapchain's); its owner keeps it alive.
+pub fn raw_image(
+    enc: &Encoder<'_>,
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
     (before, old): (&[Access], vk::ImageLayout),
     (after, new): (&[Access], vk::ImageLayout),
 ) {
@@ -128,7 +145,7 @@ pub fn image(
         .new_layout(new)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image.raw)
+        .image(image)
         .subresource_range(range)];
     // SAFETY: recording into a command buffer in the recording state; the image outlives the submission
     // (its owner waits for the GPU before dropping it).

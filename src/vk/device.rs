@@ -10,6 +10,7 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::adapter::{self, Adapter, Requirements};
 use super::instance::Instance;
+use super::surface::{Surface, WindowTarget};
 use super::validation::ValidationLog;
 
 /// How to open a device.
@@ -21,13 +22,16 @@ pub struct DeviceOptions {
     pub device_index: Option<usize>,
     /// What the program's passes need; devices lacking any of it are skipped with the reason.
     pub requirements: Requirements,
+    /// A window to present to (the live viewer): the device then owns its surface, enables swapchains, and
+    /// only devices whose queue can present to it are chosen.
+    pub window: Option<WindowTarget>,
 }
 
 impl DeviceOptions {
     /// Validation from `SENSORLIGHT_VALIDATION=1`, device from the `--device` flag.
     pub fn from_env(device_index: Option<usize>, requirements: Requirements) -> Self {
         let validation = std::env::var("SENSORLIGHT_VALIDATION").is_ok_and(|v| v == "1");
-        Self { validation, device_index, requirements }
+        Self { validation, device_index, requirements, window: None }
     }
 }
 
@@ -40,7 +44,8 @@ pub struct Device {
     allocator: ManuallyDrop<Mutex<Allocator>>,
     /// For one-off submissions (`submit_and_wait`, in `submit.rs`).
     pub(super) submitter: Mutex<Submitter>,
-    // Declared last: dropped after `Drop::drop` has destroyed the device.
+    // Declared last: dropped after `Drop::drop` has destroyed the device, the surface before the instance.
+    surface: Option<Surface>,
     instance: Instance,
 }
 
@@ -53,8 +58,20 @@ pub(super) struct Submitter {
 
 impl Device {
     pub fn new(options: &DeviceOptions) -> Result<Arc<Self>> {
-        let instance = Instance::new(options.validation)?;
-        let adapters = adapter::enumerate(&instance, &options.requirements)?;
+        let wanted = match &options.window {
+            Some(window) => window.instance_extensions()?,
+            None => &[],
+        };
+        let instance = Instance::new(options.validation, wanted)?;
+        let surface = options.window.as_ref().map(|w| Surface::new(&instance, w)).transpose()?;
+        let mut adapters = adapter::enumerate(&instance, &options.requirements)?;
+        if let Some(surface) = &surface {
+            for a in &mut adapters {
+                if a.queue_family.is_some_and(|family| !surface.supports(a.handle, family)) {
+                    a.missing.push("its queue cannot present to the window".into());
+                }
+            }
+        }
         let adapter = adapter::select(&adapters, options.device_index)?.clone();
         let queue_family = adapter.queue_family.expect("selected adapters have a queue family");
 
@@ -72,7 +89,12 @@ impl Device {
         let priorities = [1.0];
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).push_next(&mut features);
+        let swapchain = [ash::khr::swapchain::NAME.as_ptr()];
+        let extensions: &[_] = if surface.is_some() { &swapchain } else { &[] };
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(extensions)
+            .push_next(&mut features);
         // SAFETY: the physical device comes from this instance; every pointer outlives the call.
         let raw = unsafe { instance.raw.create_device(adapter.handle, &info, None) }
             .with_context(|| format!("cannot create a Vulkan device on {adapter}"))?;
@@ -111,6 +133,7 @@ impl Device {
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             submitter: Mutex::new(submitter),
+            surface,
             instance,
         }))
     }
@@ -118,6 +141,28 @@ impl Device {
     /// What the validation layer reported so far. Keep a clone to read it after the device is gone.
     pub fn validation_log(&self) -> &Arc<ValidationLog> {
         self.instance.log()
+    }
+
+    /// The window's surface, where the device was opened for one ([`DeviceOptions::window`]).
+    pub fn surface(&self) -> Option<&Surface> {
+        self.surface.as_ref()
+    }
+
+    /// Waits until the device has nothing left to do (the queue taken meanwhile: Vulkan asks that every
+    /// queue be synchronised for this).
+    pub fn wait_idle(&self) -> Result<()> {
+        let _queue = self.queue();
+        // SAFETY: the one queue is held above.
+        unsafe { self.raw.device_wait_idle() }.context("vkDeviceWaitIdle")
+    }
+
+    /// The queue, for submitting or presenting; held for as little as possible.
+    pub(super) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
+        self.queue.lock().unwrap()
+    }
+
+    pub(super) fn instance(&self) -> &Instance {
+        &self.instance
     }
 
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {

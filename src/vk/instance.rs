@@ -23,15 +23,16 @@ pub struct Instance {
 }
 
 impl Instance {
-    /// `validation` enables `VK_LAYER_KHRONOS_validation` and records its messages in [`Instance::log`].
-    pub fn new(validation: bool) -> Result<Self> {
+    /// `validation` enables `VK_LAYER_KHRONOS_validation` and records its messages in [`Instance::log`];
+    /// `wanted` are further instance extensions (a window surface's).
+    pub fn new(validation: bool, wanted: &[*const c_char]) -> Result<Self> {
         // SAFETY: loading the system's libvulkan; its symbols are only used through ash's checked tables.
         let entry = unsafe { ash::Entry::load() }
             .map_err(|e| anyhow::anyhow!("cannot load the Vulkan loader ({e}); {INSTALL_HINT}"))?;
         let log = Arc::new(ValidationLog::default());
 
         let mut layers: Vec<*const c_char> = Vec::new();
-        let mut extensions: Vec<*const c_char> = Vec::new();
+        let mut extensions: Vec<*const c_char> = wanted.to_vec();
         if validation {
             // SAFETY: plain enumeration calls on a loaded entry.
             let available = unsafe { entry.enumerate_instance_layer_properties() }?;

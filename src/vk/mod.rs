@@ -16,6 +16,8 @@ pub mod query;
 pub mod render_pass;
 pub mod slot;
 pub mod submit;
+pub mod surface;
+pub mod swapchain;
 pub mod transfer;
 pub mod validation;
 
@@ -31,3 +33,5 @@ pub use pipeline::{GraphicsDesc, Pipeline, PipelineLayout};
 pub use query::TimestampQueries;
 pub use render_pass::{Framebuffer, RenderPass};
 pub use slot::CommandSlot;
+pub use surface::WindowTarget;
+pub use swapchain::Swapchain;

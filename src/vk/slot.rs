@@ -104,6 +104,17 @@ impl CommandSlot {
         Ok(())
     }
 
+    /// Like [`CommandSlot::submit`], waiting for `wait` before its `stage` and signalling `signal` when done.
+    pub fn submit_between(
+        &mut self,
+        wait: (vk::Semaphore, vk::PipelineStageFlags),
+        signal: vk::Semaphore,
+    ) -> Result<()> {
+        self.device.submit_between(self.cmd, self.fence, Some(wait), &[signal])?;
+        self.pending = true;
+        Ok(())
+    }
+
     /// Keeps `object` alive until this slot's current (or, if idle, next) submission completes.
     pub fn retire(&mut self, object: impl Any) {
         self.retired.push(Box::new(object));

@@ -38,8 +38,25 @@ impl Device {
 
     /// Submits one recorded command buffer that signals `fence` (unsignalled) when done.
     pub(crate) fn submit(&self, cmd: vk::CommandBuffer, fence: vk::Fence) -> Result<()> {
+        self.submit_between(cmd, fence, None, &[])
+    }
+
+    /// Like [`Device::submit`], starting its `stage` only once `wait.0` is signalled and signalling `signal`
+    /// when done (a swapchain image acquired, then presented).
+    pub(crate) fn submit_between(
+        &self,
+        cmd: vk::CommandBuffer,
+        fence: vk::Fence,
+        wait: Option<(vk::Semaphore, vk::PipelineStageFlags)>,
+        signal: &[vk::Semaphore],
+    ) -> Result<()> {
         let cmds = [cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let (waits, stages): (Vec<_>, Vec<_>) = wait.into_iter().unzip();
+        let submit = [vk::SubmitInfo::default()
+            .command_buffers(&cmds)
+            .wait_semaphores(&waits)
+            .wait_dst_stage_mask(&stages)
+            .signal_semaphores(signal)];
         let queue = self.queue.lock().unwrap();
         // SAFETY: the queue is used under its mutex; the command buffer is recorded and the fence unsignalled.
         unsafe { self.raw.queue_submit(*queue, &submit, fence) }.context("vkQueueSubmit")

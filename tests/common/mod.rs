@@ -13,8 +13,12 @@ use sensorlight::vk::{Device, DeviceOptions};
 /// Runs `work` on the default device with the Khronos validation layer on, then destroys the device and
 /// fails the test if the layer reported anything (including objects left undestroyed).
 pub fn gpu<R>(work: impl FnOnce(&Arc<Device>) -> R) -> R {
-    let options =
-        DeviceOptions { validation: true, device_index: None, requirements: sensorlight::passes::requirements() };
+    let options = DeviceOptions {
+        validation: true,
+        device_index: None,
+        requirements: sensorlight::passes::requirements(),
+        window: None,
+    };
     let device = Device::new(&options).expect("tests need a Vulkan device and the validation layer (see README)");
     let log = device.validation_log().clone();
     let result = work(&device);
