@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs what sensorlight needs on Debian/Ubuntu: the Vulkan loader, lavapipe (Mesa's CPU driver, used when
 # there is no GPU), the Khronos validation layer (the tests run under it), and Debian's shaderc/glslang/
-# SPIRV-Tools libraries that build.rs compiles the shaders with. Idempotent; needs root or sudo.
+# SPIRV-Tools libraries that build.rs compiles the shaders with, and what the live viewer's window needs (X11's
+# keyboard library; Xvfb and xwd, a virtual display and its screenshots, for the viewer's tests). Idempotent;
+# needs root or sudo.
 #
 #   scripts/setup.sh [--lavapipe-backports]
 #
@@ -28,6 +30,7 @@ packages=(
     libvulkan1 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
     libshaderc-dev glslang-dev spirv-tools
     pkg-config build-essential
+    libxkbcommon-x11-0 xvfb x11-apps
 )
 
 sudo=""

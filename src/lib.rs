@@ -13,7 +13,8 @@
 //! - [`gi`]: global illumination, the radiance cache the sensors fill and see, bounce by bounce;
 //! - [`params`]: the algorithm's parameters, defaults and checks;
 //! - [`output`]: EXR and PNG writing, always atomic; [`errors`]: how an error is told to the user;
-//!   [`cancel`]: stopping a render part-way (SIGINT, SIGTERM), cleanly.
+//!   [`cancel`]: stopping a render part-way (SIGINT, SIGTERM), cleanly;
+//! - [`viewer`]: a window that shows a render converging and restarts it as the camera moves.
 
 pub mod bench;
 pub mod cancel;
@@ -34,6 +35,7 @@ pub mod scene;
 pub mod sensors;
 pub mod strategy;
 pub mod supersample;
+pub mod viewer;
 pub mod vk;
 
 /// SPIR-V of every shader in `glsl/`, compiled by build.rs: `glsl/gbuffer.vert` is `shaders::GBUFFER_VERT`.

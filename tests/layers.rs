@@ -55,6 +55,8 @@ const RULES: &[(&str, &[&str])] = &[
     // Users of the renderer.
     ("bench", &["vk", "scene", "params", "passes", "renderer", "strategy", "sensors"]),
     ("metrics", &["vk", "scene", "params", "renderer", "strategy", "output"]),
+    // The live viewer: a window over the same renderer; its files and device come from its host (the CLI).
+    ("viewer", &["vk", "scene", "params", "renderer", "gpu_types", "output", "cancel"]),
 ];
 
 /// The top-level modules named by `crate::…` paths in `text`.

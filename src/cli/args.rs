@@ -7,10 +7,13 @@ use anyhow::{Context as _, Result, ensure};
 use clap::Args;
 use glam::Vec3;
 use sensorlight::params::{
-    Bounces, DEFAULT_DRADIANCE, DEFAULT_EPSILON, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG,
-    DEFAULT_SENSOR, DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, Overrides, SensorShape,
+    Bounces, DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_DRADIANCE, DEFAULT_EPSILON,
+    DEFAULT_ESTIMATOR, DEFAULT_EXPOSURE, DEFAULT_FILTER_RADIUS, DEFAULT_FOV_DEG, DEFAULT_INDIRECT_FILTER_RADIUS,
+    DEFAULT_SENSOR, DEFAULT_SENSOR_SIZE, DEFAULT_TILE, EstimatorKind, MAX_CACHE_RESOLUTION, Overrides, SensorShape,
 };
+use sensorlight::renderer::DEFAULT_IN_FLIGHT;
 use sensorlight::scene::{ImageSize, Scene, SkyMap, Sun};
+use sensorlight::strategy::StrategyRequest;
 
 /// What a sensor sees: shared by `render`, `reference` and `bench`.
 #[derive(Args, Clone, Debug, Default)]
@@ -159,6 +162,77 @@ impl LightFlags {
         scene.set_sky(sky.map_err(|e| anyhow::anyhow!("--sky: {e:#}"))?).context("--sky")?;
         Ok(())
     }
+}
+
+/// What decides the image: the estimator, the bounces, the size and exposure, the lights, the refinement and
+/// the radiance cache. Shared by `render` and `view`, so both show the same image for the same flags.
+#[derive(Args)]
+pub struct LookFlags {
+    #[command(flatten)]
+    pub estimator: EstimatorFlags,
+    #[command(flatten)]
+    pub bounces: BounceFlags,
+    #[command(flatten)]
+    pub image: ImageFlags,
+    #[command(flatten)]
+    pub lights: LightFlags,
+    #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
+    pub estimator_kind: Option<EstimatorKind>,
+    #[arg(long, help = sensor_size_help())]
+    pub sensor_size: Option<u32>,
+    #[command(flatten)]
+    pub refinement: RefinementFlags,
+    #[arg(long, help = format!(
+        "Global illumination: the radiance cache's cells along the scene's longest side, 1 to \
+         {MAX_CACHE_RESOLUTION} (sensors per bounce grow with its square) [default: {DEFAULT_CACHE_RESOLUTION}]"
+    ))]
+    pub cache_resolution: Option<u32>,
+    #[arg(long, help = format!(
+        "Global illumination: the id-constrained filter's radius for the indirect light alone, in pixels \
+         (0 = off; the direct light keeps its own, --filter-radius) [default: {DEFAULT_INDIRECT_FILTER_RADIUS}]"
+    ))]
+    pub indirect_filter_radius: Option<u32>,
+    #[arg(long, help = format!(
+        "Global illumination: rd of the radiance cache's sensors after its first bounce (even for hemicubes) \
+         [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
+    ))]
+    pub cache_sensor_size: Option<u32>,
+}
+
+impl LookFlags {
+    /// These flags as overrides of a scene file's `[render]` table.
+    pub fn overrides(&self) -> Overrides {
+        self.refinement.overrides(self.bounces.overrides(Overrides {
+            estimator: self.estimator_kind,
+            sensor_size: self.sensor_size,
+            cache_resolution: self.cache_resolution,
+            indirect_filter_radius: self.indirect_filter_radius,
+            cache_sensor_size: self.cache_sensor_size,
+            exposure: self.image.exposure,
+            aa: self.image.aa,
+            ..self.estimator.overrides()
+        }))
+    }
+}
+
+/// How the renderer runs on the device: which device, the batching strategy, batches in flight and their
+/// memory. Shared by `render` and `view`.
+#[derive(Args)]
+pub struct EngineFlags {
+    /// Memory for one batch of sensor maps, MiB [default: the batches in flight share 1/8 of the device's
+    /// local memory]
+    #[arg(long)]
+    pub memory_budget: Option<u64>,
+    /// Batches in flight: while the device renders one, the host prepares the next (each has its own maps)
+    #[arg(long, default_value_t = DEFAULT_IN_FLIGHT, value_parser = clap::value_parser!(u32).range(1..=8))]
+    pub in_flight: u32,
+    /// How sensors are batched: auto (the fastest that passes its self-check here) or a strategy, used only
+    /// if it passes its self-check
+    #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
+    pub strategy: StrategyRequest,
+    /// Device index from `sensorlight devices` [default: the best available]
+    #[arg(long)]
+    pub device: Option<usize>,
 }
 
 /// Output size and preview: shared by `render` and `reference`.

@@ -18,6 +18,7 @@ mod progress;
 mod reference;
 mod render;
 mod say;
+mod view;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -66,6 +67,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Reproduce the paper's metrics (Table I, Fig. 10, Fig. 11) on this device.
     Metrics(metrics::MetricsArgs),
+    /// Watch a scene render in a window: it converges round by round and starts again as the camera moves.
+    View(view::ViewArgs),
 }
 
 pub fn run(cli: Cli) -> Result<ExitCode> {
@@ -81,6 +84,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Metrics(args) => metrics::run(args),
+        Command::View(args) => view::run(args),
     }
 }
 
@@ -256,17 +260,28 @@ const EXIT_VALIDATION: u8 = 3;
 /// Opens the device (`--device N` or the best one), says which, runs `work`, closes the device, and turns
 /// validation messages into a non-zero exit.
 fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> Result<()>) -> Result<ExitCode> {
-    let options = DeviceOptions::from_env(device_index, sensorlight::passes::requirements());
-    let device = match device_index {
+    let device = open_device(DeviceOptions::from_env(device_index, sensorlight::passes::requirements()))?;
+    let log = device.validation_log().clone();
+    let result = work(&device);
+    drop(device);
+    validated(&log, result)
+}
+
+/// Opens the device `options` asks for (`--device N` or the best one) and, with `-v`, says which.
+fn open_device(options: DeviceOptions) -> Result<Arc<Device>> {
+    let device = match options.device_index {
         Some(i) => Device::new(&options).with_context(|| format!("--device {i} (see `sensorlight devices`)"))?,
         None => Device::new(&options)?,
     };
     if say::verbose() {
         sensorlight::errln!("device: {}", device.adapter);
     }
-    let log = device.validation_log().clone();
-    let result = work(&device);
-    drop(device);
+    Ok(device)
+}
+
+/// `result` of work on a device now closed, with the validation layer's messages (`log`) made an error
+/// exit.
+fn validated(log: &sensorlight::vk::validation::ValidationLog, result: Result<()>) -> Result<ExitCode> {
     // Said whether the work failed or not: a render stopped part-way must tear down as cleanly as one done.
     let messages = log.messages();
     if !messages.is_empty() {
@@ -277,6 +292,27 @@ fn with_device(device_index: Option<usize>, work: impl FnOnce(&Arc<Device>) -> R
         return Ok(ExitCode::from(EXIT_VALIDATION));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The renderer `render` and `view` use for `scene` with `params`, as `engine` says; strategy events go to
+/// `report`.
+fn build_renderer(
+    device: &Arc<Device>,
+    (scene, params): (&Scene, &RenderParams),
+    engine: &args::EngineFlags,
+    cache: &mut sensorlight::strategy::Cache,
+    report: &mut dyn FnMut(Event),
+) -> Result<sensorlight::renderer::Renderer> {
+    sensorlight::renderer::Renderer::builder(device, scene, params.estimator.sensor, params.sensor_size)
+        .estimator(params.estimator_kind)
+        .radiance_cache(sensorlight::renderer::CacheConfig::for_params(params))
+        .memory_budget(engine.memory_budget.map(|mib| mib << 20))
+        .in_flight(engine.in_flight)
+        .strategy(engine.strategy)
+        .cache(cache)
+        .on_strategy_event(report)
+        .build()
+        .map_err(|e| attribute(params, e))
 }
 
 /// What the strategy choice found, for `-v`: refusals (multiview on lavapipe 22.3, a driver bug, is no

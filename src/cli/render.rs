@@ -9,17 +9,12 @@ use clap::Args;
 use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
-use sensorlight::params::{
-    Antialiasing, DEFAULT_CACHE_RESOLUTION, DEFAULT_CACHE_SENSOR_SIZE, DEFAULT_ESTIMATOR,
-    DEFAULT_INDIRECT_FILTER_RADIUS, EstimatorKind, MAX_CACHE_RESOLUTION, Overrides, RenderParams,
-};
-use sensorlight::renderer::{CacheConfig, DEFAULT_IN_FLIGHT, RenderOutput, RenderStats, Renderer};
+use sensorlight::params::{Antialiasing, RenderParams};
+use sensorlight::renderer::{RenderOutput, RenderStats};
 use sensorlight::scene::Scene;
-use sensorlight::strategy::{Cache, Event, StrategyRequest};
+use sensorlight::strategy::{Cache, Event};
 
-use super::args::{
-    BounceFlags, EstimatorFlags, ImageFlags, LightFlags, RefinementFlags, estimator_help, sensor_size_help,
-};
+use super::args::{EngineFlags, LookFlags};
 use super::progress::{Preview, RenderProgress};
 use super::say;
 
@@ -33,34 +28,7 @@ pub struct RenderArgs {
     #[arg(short, long, value_name = "F.exr|F.png")]
     output: PathBuf,
     #[command(flatten)]
-    estimator: EstimatorFlags,
-    #[command(flatten)]
-    bounces: BounceFlags,
-    #[command(flatten)]
-    image: ImageFlags,
-    #[command(flatten)]
-    lights: LightFlags,
-    #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
-    estimator_kind: Option<EstimatorKind>,
-    #[arg(long, help = sensor_size_help())]
-    sensor_size: Option<u32>,
-    #[command(flatten)]
-    refinement: RefinementFlags,
-    #[arg(long, help = format!(
-        "Global illumination: the radiance cache's cells along the scene's longest side, 1 to \
-         {MAX_CACHE_RESOLUTION} (sensors per bounce grow with its square) [default: {DEFAULT_CACHE_RESOLUTION}]"
-    ))]
-    cache_resolution: Option<u32>,
-    #[arg(long, help = format!(
-        "Global illumination: the id-constrained filter's radius for the indirect light alone, in pixels \
-         (0 = off; the direct light keeps its own, --filter-radius) [default: {DEFAULT_INDIRECT_FILTER_RADIUS}]"
-    ))]
-    indirect_filter_radius: Option<u32>,
-    #[arg(long, help = format!(
-        "Global illumination: rd of the radiance cache's sensors after its first bounce (even for hemicubes) \
-         [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
-    ))]
-    cache_sensor_size: Option<u32>,
+    pub look: LookFlags,
     /// Also write AOVs into the EXR (an .exr output only): radiance.* (R; a supersampled pixel's, the mean
     /// over its samples on a surface), sensor_mask (1 sensed, 0.5 interpolated), supersampled (1 where the
     /// pixel took sub-pixel samples), surface_id, emission.*, and a denoiser's: albedo.* (Kd), normal.X/Y/Z
@@ -71,20 +39,8 @@ pub struct RenderArgs {
     /// Write the render statistics as JSON to this file (two runs of one command differ only in the measured times)
     #[arg(long)]
     stats_json: Option<PathBuf>,
-    /// Memory for one batch of sensor maps, MiB [default: the batches in flight share 1/8 of the device's
-    /// local memory]
-    #[arg(long)]
-    memory_budget: Option<u64>,
-    /// Batches in flight: while the device renders one, the host prepares the next (each has its own maps)
-    #[arg(long, default_value_t = DEFAULT_IN_FLIGHT, value_parser = clap::value_parser!(u32).range(1..=8))]
-    in_flight: u32,
-    /// How sensors are batched: auto (the fastest that passes its self-check here) or a strategy, used only
-    /// if it passes its self-check
-    #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
-    strategy: StrategyRequest,
-    /// Device index from `sensorlight devices` [default: the best available]
-    #[arg(long)]
-    device: Option<usize>,
+    #[command(flatten)]
+    engine: EngineFlags,
     /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
     /// the render ends
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -92,21 +48,6 @@ pub struct RenderArgs {
     /// Also write the scene as rendered (for a mesh: its automatic camera) as a TOML scene file to edit
     #[arg(long, value_name = "SCENE.toml")]
     write_scene: Option<PathBuf>,
-}
-
-impl RenderArgs {
-    fn overrides(&self) -> Overrides {
-        self.refinement.overrides(self.bounces.overrides(Overrides {
-            estimator: self.estimator_kind,
-            sensor_size: self.sensor_size,
-            cache_resolution: self.cache_resolution,
-            indirect_filter_radius: self.indirect_filter_radius,
-            cache_sensor_size: self.cache_sensor_size,
-            exposure: self.image.exposure,
-            aa: self.image.aa,
-            ..self.estimator.overrides()
-        }))
-    }
 }
 
 /// Where `--preview-every` writes: beside the EXR, never one of the final outputs, so that their all-or-none
@@ -124,7 +65,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     if let Some(path) = &args.write_scene {
         atomic::check_extension(path, "toml")?;
     }
-    let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
+    let outputs = super::ImageOutputs::new(&args.output, args.look.image.write_png())?;
     ensure!(
         !args.aovs || outputs.exr.is_some(),
         "--aovs writes its layers into the EXR, and -o {} asks for a PNG alone; name an .exr output (its PNG is \
@@ -132,18 +73,18 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         args.output.display()
     );
     outputs.check(&extra, &[&args.scene])?;
-    let size = (args.image.width, args.image.height);
-    let (scene, params) = super::load_input(&args.scene, &args.overrides(), size, &args.lights)?;
+    let size = (args.look.image.width, args.look.image.height);
+    let (scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
     // Again with the mesh and its materials, known now.
     outputs.check(&extra, &scene.input_paths())?;
-    let size = args.image.size(&scene)?;
+    let size = args.look.image.size(&scene)?;
     // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
     // and every staged output.
     let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
-    super::with_device(args.device, |device| {
+    super::with_device(args.engine.device, |device| {
         let started = Instant::now();
         let preview =
             preview.map(|path| Preview { every: args.preview_every.unwrap_or(1), path, exposure: params.exposure });
@@ -159,16 +100,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
                 measured = per_sensor;
             }
         };
-        let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
-            .estimator(params.estimator_kind)
-            .radiance_cache(CacheConfig::for_params(&params))
-            .memory_budget(args.memory_budget.map(|mib| mib << 20))
-            .in_flight(args.in_flight)
-            .strategy(args.strategy)
-            .cache(&mut cache)
-            .on_strategy_event(&mut report)
-            .build()
-            .map_err(|e| super::attribute(&params, e))?;
+        let mut renderer = super::build_renderer(device, (&scene, &params), &args.engine, &mut cache, &mut report)?;
         cancel.check()?;
         if let Some(&(_, t)) = measured.iter().find(|(kind, _)| *kind == renderer.strategy()) {
             progress.probe_measured(t);
@@ -352,35 +284,13 @@ fn write_outputs(
     out: &RenderOutput,
     cancel: &Cancel,
 ) -> Result<()> {
-    let size = out.size;
     let (exposure, auto) = super::png_exposure(params, &args.scene, &out.image, &out.gbuffer);
     if auto && outputs.png.is_some() && say::normal() {
         sensorlight::errln!("{}", super::auto_exposure_text(exposure));
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    if let Some(path) = &outputs.exr {
-        let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
-        if args.aovs {
-            let mask = out.radiance.iter().map(|r| match r.w {
-                w if w == radiance_state::SENSED => 1.0,
-                w if w == radiance_state::INTERPOLATED => 0.5,
-                _ => 0.0,
-            });
-            let mut supersampled = vec![0.0; out.radiance.len()];
-            for &i in &out.supersampled {
-                supersampled[i as usize] = 1.0;
-            }
-            let with_r = (exr.rgb("radiance", &out.radiance))
-                .scalar("sensor_mask", mask.collect())
-                .scalar("supersampled", supersampled);
-            exr = super::gbuffer_aovs(with_r, &out.gbuffer, scene.camera.eye);
-        }
-        exr.stage(&mut files, path)?;
-    }
-    if let Some(path) = &outputs.png {
-        png::stage(&mut files, path, (size.width, size.height), &out.image, exposure)?;
-    }
+    stage_images(&mut files, outputs, out, (exposure, args.aovs), scene.camera.eye)?;
     if let Some(path) = &args.write_scene {
         // The scene file renders as the mesh did: its automatic exposure written down.
         let mut render = scene.render.clone();
@@ -401,6 +311,41 @@ fn write_outputs(
         for path in outputs.paths().chain(extra.into_iter().flatten()) {
             sensorlight::errln!("wrote {}", path.display());
         }
+    }
+    Ok(())
+}
+
+/// Stages the EXR (with the AOVs if `aovs`) and the PNG at `exposure` that `outputs` names among `files`:
+/// `render`'s images, and the viewer's saves.
+pub(super) fn stage_images(
+    files: &mut atomic::Outputs,
+    outputs: &super::ImageOutputs,
+    out: &RenderOutput,
+    (exposure, aovs): (f32, bool),
+    eye: glam::Vec3,
+) -> Result<()> {
+    let size = out.size;
+    if let Some(path) = &outputs.exr {
+        let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
+        if aovs {
+            let mask = out.radiance.iter().map(|r| match r.w {
+                w if w == radiance_state::SENSED => 1.0,
+                w if w == radiance_state::INTERPOLATED => 0.5,
+                _ => 0.0,
+            });
+            let mut supersampled = vec![0.0; out.radiance.len()];
+            for &i in &out.supersampled {
+                supersampled[i as usize] = 1.0;
+            }
+            let with_r = (exr.rgb("radiance", &out.radiance))
+                .scalar("sensor_mask", mask.collect())
+                .scalar("supersampled", supersampled);
+            exr = super::gbuffer_aovs(with_r, &out.gbuffer, eye);
+        }
+        exr.stage(files, path)?;
+    }
+    if let Some(path) = &outputs.png {
+        png::stage(files, path, (size.width, size.height), &out.image, exposure)?;
     }
     Ok(())
 }

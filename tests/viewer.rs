@@ -1,0 +1,280 @@
+//! `sensorlight view` on a virtual display (Xvfb, installed by scripts/setup.sh): the window shows the very
+//! pixels `render` writes for the same camera, a scripted orbit moves the camera as it says and the window
+//! shows the render from there; without a display the viewer says so and fails.
+
+mod common;
+
+use std::io::{BufRead as _, BufReader, Read as _, Write as _};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use glam::{Quat, Vec3};
+
+/// Small, so that each render takes seconds under the validation layer.
+const SIZE: u32 = 64;
+/// The orbit the script makes, degrees about the world's up.
+const YAW_DEG: f32 = 20.0;
+
+/// An X server of its own on a free display number, ended when dropped.
+struct Xvfb {
+    display: String,
+    process: Child,
+}
+
+impl Xvfb {
+    fn start() -> Self {
+        // Tests start servers one at a time, so that two never pick the same free number.
+        static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+        let _one = STARTING.lock().unwrap_or_else(|e| e.into_inner());
+        for n in 90..200 {
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+                continue;
+            }
+            let display = format!(":{n}");
+            let process = Command::new("Xvfb")
+                .args([&display, "-screen", "0", "320x240x24", "-nolisten", "tcp"])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("the viewer's tests need Xvfb: run scripts/setup.sh (apt package xvfb)");
+            let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+            let start = Instant::now();
+            while !socket.exists() && start.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            assert!(socket.exists(), "Xvfb {display} did not start");
+            return Self { display, process };
+        }
+        panic!("no free X display number in 90..200");
+    }
+
+    /// The screen's top-left `SIZE` × `SIZE` pixels as RGB bytes (xwd's dump, parsed).
+    fn top_left(&self) -> Vec<u8> {
+        let run = Command::new("xwd")
+            .args(["-root", "-silent", "-display", &self.display])
+            .output()
+            .expect("the viewer's tests need xwd: run scripts/setup.sh (apt package x11-apps)");
+        assert!(run.status.success(), "xwd: {}", String::from_utf8_lossy(&run.stderr));
+        xwd_rgb(&run.stdout, SIZE, SIZE)
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.process.kill();
+        let _ = self.process.wait();
+    }
+}
+
+/// The top-left `w` × `h` pixels of an XWD dump (X11's window dump: a big-endian header, a colour map, then
+/// the pixels) of a 24/32-bit true-colour screen, as RGB bytes.
+fn xwd_rgb(dump: &[u8], w: u32, h: u32) -> Vec<u8> {
+    let word = |i: usize| u32::from_be_bytes(dump[4 * i..4 * i + 4].try_into().unwrap());
+    let (header, format, width, height) = (word(0) as usize, word(2), word(4), word(5));
+    let (byte_order, bits, stride) = (word(7), word(11), word(12) as usize);
+    let masks = [word(14), word(15), word(16)];
+    let colours = word(19) as usize;
+    assert_eq!((format, bits), (2, 32), "expected a 32-bit ZPixmap dump");
+    assert!(width >= w && height >= h);
+    let data = &dump[header + 12 * colours..];
+    let mut rgb = Vec::with_capacity((3 * w * h) as usize);
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let b: [u8; 4] = data[y * stride + 4 * x..][..4].try_into().unwrap();
+            let v = if byte_order == 0 { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) };
+            rgb.extend(masks.map(|m| ((v & m) >> m.trailing_zeros()) as u8));
+        }
+    }
+    rgb
+}
+
+fn png_rgb(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height, info.color_type), (SIZE, SIZE, png::ColorType::Rgb));
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// How many bytes differ, and by at most how much.
+fn difference(a: &[u8], b: &[u8]) -> (usize, u8) {
+    let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+    (differ, a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0))
+}
+
+/// Screenshots until the window shows `expected` (presenting may land a moment after the viewer says it
+/// did), for up to 10 s; the last screenshot.
+fn screenshot_until(x: &Xvfb, expected: &[u8]) -> Vec<u8> {
+    let start = Instant::now();
+    loop {
+        let shot = x.top_left();
+        if shot == expected || start.elapsed() > Duration::from_secs(10) {
+            return shot;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// `render`'s PNG of `scene` at the test's size.
+fn render_png(scene: &Path, out: &Path) -> Vec<u8> {
+    let size = SIZE.to_string();
+    let args = ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", &size, "--height", &size];
+    let run = common::sensorlight(&args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    png_rgb(&out.with_extension("png"))
+}
+
+/// The camera a `sync` line reports.
+#[derive(serde::Deserialize)]
+struct Synced {
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: [f32; 3],
+    vfov_deg: f32,
+}
+
+fn synced(line: &str, n: u32) -> Synced {
+    let json = line.strip_prefix(&format!("sync {n} ")).unwrap_or_else(|| panic!("expected sync {n}, got {line}"));
+    serde_json::from_str(json).unwrap()
+}
+
+#[test]
+fn the_window_shows_what_render_writes_before_and_after_a_scripted_orbit() {
+    let dir = common::scratch("viewer");
+    let x = Xvfb::start();
+    let script = dir.join("orbit.script");
+    let saved = dir.join("saved.exr");
+    std::fs::write(
+        &script,
+        format!("wait done\nsync\norbit {YAW_DEG} 0\nwait round 1\nwait done\nsync\nsave {}\nquit\n", saved.display()),
+    )
+    .unwrap();
+    let size = SIZE.to_string();
+    let mut viewer = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--timings"])
+        .arg("--script")
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = viewer.stderr.take().unwrap();
+    let errors = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = stderr.read_to_string(&mut text);
+        text
+    });
+    let mut stdin = viewer.stdin.take().unwrap();
+    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
+    let mut next_line = || lines.next().and_then(Result::ok).unwrap_or_default();
+
+    // The scene's own camera: the window shows render's PNG, byte for byte.
+    let first = next_line();
+    let start = synced(&first, 1);
+    let expected = render_png(&common::project("scenes/cornell/cornell.toml"), &dir.join("render.exr"));
+    let shot = screenshot_until(&x, &expected);
+    let (differ, most) = difference(&shot, &expected);
+    assert!(differ == 0, "the window differs from render's PNG in {differ} bytes, by up to {most}");
+    writeln!(stdin).unwrap();
+
+    // After `orbit 20 0`: the eye turned 20° about the up through the target, nothing else moved.
+    let second = next_line();
+    let moved = synced(&second, 2);
+    let (eye0, target) = (Vec3::from(start.eye), Vec3::from(start.target));
+    let eye = target + Quat::from_axis_angle(Vec3::from(start.up), YAW_DEG.to_radians()) * (eye0 - target);
+    assert!((Vec3::from(moved.eye) - eye).length() < 1e-3 * (eye0 - target).length(), "{second}");
+    assert_eq!((moved.target, moved.up, moved.vfov_deg), (start.target, start.up, start.vfov_deg));
+    // That camera written into a scene file and rendered: the window shows it, and it is another image.
+    let obj = common::project("scenes/cornell/cornell.obj");
+    let f = |v: [f32; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
+    let toml = format!(
+        "mesh = {:?}\n[camera]\neye = {}\ntarget = {}\nup = {}\nvfov_deg = {:?}\n[image]\nwidth = {SIZE}\nheight = \
+         {SIZE}\n[render]\nexposure = 1.0\n",
+        obj.to_str().unwrap(),
+        f(moved.eye),
+        f(moved.target),
+        f(moved.up),
+        moved.vfov_deg
+    );
+    let scene = dir.join("moved.toml");
+    std::fs::write(&scene, toml).unwrap();
+    let expected_moved = render_png(&scene, &dir.join("moved.exr"));
+    let (changed, _) = difference(&expected_moved, &expected);
+    assert!(changed > expected.len() / 4, "the orbit changed only {changed} bytes of the image");
+    let shot = screenshot_until(&x, &expected_moved);
+    let (differ, most) = difference(&shot, &expected_moved);
+    assert!(differ == 0, "after the orbit the window differs from render's PNG in {differ} bytes, by up to {most}");
+    writeln!(stdin).unwrap();
+
+    let status = viewer.wait().unwrap();
+    let errors = errors.join().unwrap();
+    assert!(status.success(), "{status}: {errors}");
+    assert!(errors.contains("first picture") && errors.contains("after the move"), "{errors}");
+    // `save` wrote what `render` writes for that camera.
+    assert_eq!(png_rgb(&saved.with_extension("png")), expected_moved, "the saved PNG is render's");
+    let (w, h, aovs) = sensorlight::output::exr::read_channels(&saved, &["sensor_mask", "radiance.R"]).unwrap();
+    assert_eq!((w, h), (SIZE as usize, SIZE as usize));
+    assert!(aovs[0].contains(&1.0), "the EXR has the AOVs, the sensor mask among them");
+}
+
+#[test]
+fn quitting_mid_render_ends_cleanly() {
+    let dir = common::scratch("viewer-quit");
+    let x = Xvfb::start();
+    let script = dir.join("quit.script");
+    // Quit as soon as the first round is shown: the render stops between batches, nothing is left behind.
+    std::fs::write(&script, "wait round 1\nquit\n").unwrap();
+    let run = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--width", "64", "--height", "64", "--script"])
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = common::stderr(&run);
+    // Exit code 3 would be the validation layer's messages (objects left, a semaphore still in use, …).
+    assert_eq!(run.status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("validation"), "{stderr}");
+    assert!(!common::project("view.exr").exists(), "nothing saved unasked");
+}
+
+#[test]
+fn without_a_display_the_viewer_says_so_and_points_to_render() {
+    let run = common::command()
+        .args(["view", "scenes/cornell/cornell.toml"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no display") && stderr.contains("sensorlight render"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // A display named that is not there: the window system's reason, the same advice.
+    let run = common::command().args(["view", "scenes/cornell/cornell.toml"]).env("DISPLAY", ":239").output().unwrap();
+    let stderr = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cannot open a window") && stderr.contains("sensorlight render"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_bad_script_is_refused_with_its_line_before_any_window() {
+    let dir = common::scratch("viewer-script");
+    let script = dir.join("bad.script");
+    std::fs::write(&script, "wait done\norbit 20\n").unwrap();
+    let run = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--script", script.to_str().unwrap()])
+        .env("DISPLAY", ":239")
+        .output()
+        .unwrap();
+    let stderr = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("bad.script:2") && stderr.contains("takes 2 argument(s)"), "{stderr}");
+}
