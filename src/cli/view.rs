@@ -135,7 +135,7 @@ impl ViewHost for CliHost<'_> {
             "{}: the viewer saves an EXR (with a PNG beside it); name an .exr file",
             path.display()
         );
-        let outputs = ImageOutputs::new(path, true)?;
+        let outputs = ImageOutputs::new(path, self.args.look.image.write_png())?;
         outputs.check(&[], &self.inputs)?;
         let mut files = atomic::Outputs::new();
         super::render::stage_images(&mut files, &outputs, output, (exposure, true), camera.eye)?;
