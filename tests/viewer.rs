@@ -49,14 +49,19 @@ impl Xvfb {
         panic!("no free X display number in 90..200");
     }
 
-    /// The screen's top-left `SIZE` × `SIZE` pixels as RGB bytes (xwd's dump, parsed).
+    /// The screen's top-left `SIZE` × `SIZE` pixels as RGB bytes.
     fn top_left(&self) -> Vec<u8> {
+        self.pixels(SIZE, SIZE)
+    }
+
+    /// The screen's top-left `w` × `h` pixels as RGB bytes (xwd's dump, parsed).
+    fn pixels(&self, w: u32, h: u32) -> Vec<u8> {
         let run = Command::new("xwd")
             .args(["-root", "-silent", "-display", &self.display])
             .output()
             .expect("the viewer's tests need xwd: run scripts/setup.sh (apt package x11-apps)");
         assert!(run.status.success(), "xwd: {}", String::from_utf8_lossy(&run.stderr));
-        xwd_rgb(&run.stdout, SIZE, SIZE)
+        xwd_rgb(&run.stdout, w, h)
     }
 }
 
@@ -221,6 +226,89 @@ fn the_window_shows_what_render_writes_before_and_after_a_scripted_orbit() {
     let (w, h, aovs) = sensorlight::output::exr::read_channels(&saved, &["sensor_mask", "radiance.R"]).unwrap();
     assert_eq!((w, h), (SIZE as usize, SIZE as usize));
     assert!(aovs[0].contains(&1.0), "the EXR has the AOVs, the sensor mask among them");
+}
+
+#[test]
+fn a_window_of_another_shape_shows_the_picture_letterboxed() {
+    let dir = common::scratch("viewer-resize");
+    let x = Xvfb::start();
+    let script = dir.join("resize.script");
+    // Twice as wide as the picture: the swapchain is made anew, the picture centred at 1:1 between bars.
+    std::fs::write(&script, format!("wait done\nresize {} {SIZE}\nsync\nquit\n", 2 * SIZE)).unwrap();
+    let size = SIZE.to_string();
+    let mut viewer = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--script"])
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
+    let line = lines.next().and_then(Result::ok).unwrap_or_default();
+    assert!(line.starts_with("sync 1"), "{line}");
+    let picture = render_png(&common::project("scenes/cornell/cornell.toml"), &dir.join("render.exr"));
+    let (w, margin) = (2 * SIZE as usize, SIZE as usize / 2);
+    let expected_at = |x: usize, y: usize| -> Option<[u8; 3]> {
+        let inside = (margin..margin + SIZE as usize).contains(&x);
+        inside.then(|| picture[3 * (y * SIZE as usize + x - margin)..][..3].try_into().unwrap())
+    };
+    // The bars' grey is the clear value 0.12 as UNORM, rounded either way.
+    let matches = |shot: &[u8]| {
+        (0..SIZE as usize).all(|y| {
+            (0..w).all(|x| {
+                let p = &shot[3 * (y * w + x)..][..3];
+                match expected_at(x, y) {
+                    Some(e) => p == e,
+                    None => p.iter().all(|&v| v.abs_diff(31) <= 1),
+                }
+            })
+        })
+    };
+    let start = Instant::now();
+    let mut shot = x.pixels(2 * SIZE, SIZE);
+    while !matches(&shot) && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(200));
+        shot = x.pixels(2 * SIZE, SIZE);
+    }
+    assert!(matches(&shot), "the window does not show the picture between two grey bars");
+    writeln!(viewer.stdin.take().unwrap()).unwrap();
+    let mut errors = String::new();
+    let _ = viewer.stderr.take().unwrap().read_to_string(&mut errors);
+    let status = viewer.wait().unwrap();
+    assert!(status.success(), "{status}: {errors}");
+}
+
+#[test]
+fn ctrl_c_stops_the_viewer_as_it_stops_a_render() {
+    let dir = common::scratch("viewer-interrupt");
+    let x = Xvfb::start();
+    let script = dir.join("interrupt.script");
+    std::fs::write(&script, "wait round 1\nsync\nwait done\nquit\n").unwrap();
+    let mut viewer = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--width", "64", "--height", "64", "--script"])
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
+    let line = lines.next().and_then(Result::ok).unwrap_or_default();
+    assert!(line.starts_with("sync 1"), "{line}");
+    // Mid-render (round 1 shown, the script waiting): SIGINT, then the script goes on.
+    let kill = Command::new("kill").args(["-INT", &viewer.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    writeln!(viewer.stdin.take().unwrap()).unwrap();
+    let mut errors = String::new();
+    let _ = viewer.stderr.take().unwrap().read_to_string(&mut errors);
+    let status = viewer.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{errors}");
+    assert!(errors.contains("interrupted") && !errors.contains("validation"), "{errors}");
 }
 
 #[test]

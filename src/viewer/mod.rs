@@ -102,7 +102,7 @@ pub fn run(setup: ViewSetup<'_>, host: &mut dyn ViewHost) -> Result<()> {
         show: Show::Image,
         name: setup.name.clone(),
         output_path: setup.output.clone(),
-        script: setup.script.clone().map(|commands| ScriptRun { commands, next: 0, syncs: 0 }),
+        script: setup.script.clone().map(|commands| ScriptRun { commands, next: 0, syncs: 0, resizing: None }),
         timings: setup.timings,
         wanted: true,
         quit: false,
@@ -165,7 +165,12 @@ struct ScriptRun {
     commands: Vec<Command>,
     next: usize,
     syncs: u32,
+    /// A `resize` asked for this size at this time: the script waits until the window has it (or a while).
+    resizing: Option<((u32, u32), Instant)>,
 }
+
+/// How long a script's `resize` waits for the window system to grant the size before it goes on.
+const RESIZE_WAIT: Duration = Duration::from_secs(5);
 
 struct Session<'h> {
     window: Window,
@@ -244,8 +249,14 @@ impl Session<'_> {
 
     /// Reads the window's events and the script's next commands, and does what they ask.
     fn pump(&mut self, wait: Option<Duration>) {
-        let mut actions = self.window.poll(wait);
-        actions.extend(self.step_script());
+        // The window's first, so that a script that goes on (and may block in `sync`) sees their effect.
+        let from_window = self.window.poll(wait);
+        self.act(from_window);
+        let from_script = self.step_script();
+        self.act(from_script);
+    }
+
+    fn act(&mut self, actions: Vec<Action>) {
         let mut redraw = false;
         for action in actions {
             redraw |= self.apply(action);
@@ -275,6 +286,7 @@ impl Session<'_> {
                 self.saves.push((path, fatal));
                 return false;
             }
+            Action::Resize(width, height) => self.window.request_size((width, height)),
             Action::Redraw => {}
             Action::Quit => {
                 self.quit = true;
@@ -303,8 +315,14 @@ impl Session<'_> {
     /// The next script commands that can run now, as actions. A `wait` stops the script until it is met.
     fn step_script(&mut self) -> Vec<Action> {
         let mut actions = Vec::new();
-        let (done, rounds) = (self.this.done(), self.this.rounds);
+        let (done, rounds, size) = (self.this.done(), self.this.rounds, self.window.size());
         let Some(run) = &mut self.script else { return actions };
+        if let Some((wanted, asked)) = run.resizing {
+            if size != wanted && asked.elapsed() < RESIZE_WAIT {
+                return actions;
+            }
+            run.resizing = None;
+        }
         while let Some(command) = run.commands.get(run.next) {
             let action = match command {
                 Command::WaitDone if !done => break,
@@ -334,13 +352,17 @@ impl Session<'_> {
                 Command::Exposure(stops) => Some(Action::ExposureTo(*stops)),
                 Command::Show(show) => Some(Action::Show(*show)),
                 Command::Save(path) => Some(Action::Save(Some(path.clone()))),
+                Command::Resize { width, height } => {
+                    run.resizing = Some(((*width, *height), Instant::now()));
+                    Some(Action::Resize(*width, *height))
+                }
                 Command::Quit => Some(Action::Quit),
             };
             run.next += 1;
             let moves = matches!(action, Some(Action::Orbit { .. } | Action::Pan { .. } | Action::Dolly(_)));
             actions.extend(action);
-            // A move starts a render: what follows waits for it, so the script stops here this time.
-            if moves {
+            // A move starts a render, a resize waits for the window: what follows waits for either.
+            if moves || run.resizing.is_some() {
                 break;
             }
         }

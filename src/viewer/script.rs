@@ -11,6 +11,7 @@
 //! exposure 1.5           # stops
 //! show radiance          # image | radiance | sensors | surfaces | emission
 //! save out.exr           # once done: the EXR (image and AOVs) and the PNG beside it, as `render` writes
+//! resize 320 240         # ask for a window of that many pixels (the picture is letterboxed in it)
 //! quit
 //! ```
 
@@ -32,6 +33,7 @@ pub enum Command {
     Exposure(f32),
     Show(Show),
     Save(PathBuf),
+    Resize { width: u32, height: u32 },
     Quit,
 }
 
@@ -95,8 +97,16 @@ fn command(verb: &str, args: &[&str]) -> Result<Command> {
             })?)
         }
         "save" => count(1).map(|_| Command::Save(PathBuf::from(args[0])))?,
+        "resize" => {
+            count(2)?;
+            let pixels = |word: &str| match word.parse::<u32>() {
+                Ok(n) if (1..=16_384).contains(&n) => Ok(n),
+                _ => Err(anyhow::anyhow!("`resize`: '{word}' is not a size in pixels from 1 to 16384")),
+            };
+            Command::Resize { width: pixels(args[0])?, height: pixels(args[1])? }
+        }
         "quit" => count(0).map(|_| Command::Quit)?,
-        _ => bail!("unknown command '{verb}' (wait, sync, orbit, pan, dolly, exposure, show, save, quit)"),
+        _ => bail!("unknown command '{verb}' (wait, sync, orbit, pan, dolly, exposure, show, save, resize, quit)"),
     })
 }
 
@@ -107,7 +117,7 @@ mod tests {
     #[test]
     fn every_command_parses_and_comments_and_blank_lines_are_skipped() {
         let text = "# a test\n\nwait round 2\nwait done # then\nsync\norbit 20 -5\npan 0.1 0\ndolly 0.8\n\
-                    exposure -1.5\nshow sensors\nsave out.exr\nquit\n";
+                    exposure -1.5\nshow sensors\nsave out.exr\nresize 320 240\nquit\n";
         let commands = parse(text).unwrap();
         assert_eq!(
             commands,
@@ -121,6 +131,7 @@ mod tests {
                 Command::Exposure(-1.5),
                 Command::Show(Show::Sensors),
                 Command::Save(PathBuf::from("out.exr")),
+                Command::Resize { width: 320, height: 240 },
                 Command::Quit,
             ]
         );
@@ -137,6 +148,7 @@ mod tests {
             ("pan x 0", 1, "'x' is not a finite number"),
             ("exposure inf", 1, "not a finite number"),
             ("\n\nshow depth", 3, "'depth' is none of image, radiance"),
+            ("resize 0 10", 1, "not a size in pixels"),
         ] {
             let (at, e) = parse(text).unwrap_err();
             assert_eq!(at, line, "{text}");

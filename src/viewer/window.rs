@@ -61,6 +61,8 @@ pub enum Action {
     Show(Show),
     /// Save where `-o` says (`None`) or at the path.
     Save(Option<std::path::PathBuf>),
+    /// Ask the window system for a window of this many pixels (a script's: a hand resizes by the frame).
+    Resize(u32, u32),
     /// Show the picture again (the window was uncovered or resized).
     Redraw,
     Quit,
@@ -121,6 +123,12 @@ impl Window {
     pub fn size(&self) -> (u32, u32) {
         let s = self.raw().inner_size();
         (s.width, s.height)
+    }
+
+    /// Asks for a drawable size of `size` pixels; the window system may grant another (a `Resized` follows).
+    pub fn request_size(&self, size: (u32, u32)) {
+        // Where it is granted at once, the size is reported by `size` without an event.
+        let _ = self.raw().request_inner_size(PhysicalSize::new(size.0, size.1));
     }
 
     pub fn set_title(&self, title: &str) {
