@@ -114,11 +114,13 @@ pub fn run(setup: ViewSetup<'_>, host: &mut dyn ViewHost) -> Result<()> {
         last_title: Instant::now(),
     };
     let result = session.run(&mut renderer, &setup);
-    // The renderer's batches and the presenter's slot are waited for as they go, before the device.
-    drop(renderer);
     let summary = session.summary();
-    drop(session);
+    // Everything made on the device goes before it (each waits for its own work), and the device, which
+    // owns the window's surface, before the window.
+    let Session { window, presenter, .. } = session;
+    drop((renderer, presenter));
     drop(device);
+    drop(window);
     if let Some(line) = summary {
         host.say(&line);
     }
