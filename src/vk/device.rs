@@ -9,7 +9,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::adapter::{self, Adapter, Requirements};
-use super::instance::Instance;
+use super::instance::{Instance, loader_lock};
 use super::surface::{Surface, WindowTarget};
 use super::validation::ValidationLog;
 
@@ -96,8 +96,11 @@ impl Device {
             .enabled_extension_names(extensions)
             .push_next(&mut features);
         // SAFETY: the physical device comes from this instance; every pointer outlives the call.
-        let raw = unsafe { instance.raw.create_device(adapter.handle, &info, None) }
-            .with_context(|| format!("cannot create a Vulkan device on {adapter}"))?;
+        let raw = unsafe {
+            let _loader = loader_lock();
+            instance.raw.create_device(adapter.handle, &info, None)
+        }
+        .with_context(|| format!("cannot create a Vulkan device on {adapter}"))?;
         // SAFETY: queue 0 of a family we asked one queue of.
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
 
@@ -112,6 +115,7 @@ impl Device {
         let allocator = match allocator {
             Ok(a) => a,
             Err(e) => {
+                let _loader = loader_lock();
                 // SAFETY: nothing was created from the device yet.
                 unsafe { raw.destroy_device(None) };
                 return Err(e).context("cannot create the memory allocator");
@@ -121,6 +125,7 @@ impl Device {
             Ok(s) => s,
             Err(e) => {
                 drop(allocator);
+                let _loader = loader_lock();
                 // SAFETY: the allocator (the only child) is gone.
                 unsafe { raw.destroy_device(None) };
                 return Err(e);
@@ -211,6 +216,7 @@ impl Drop for Device {
             self.raw.destroy_fence(submitter.fence, None);
             self.raw.destroy_command_pool(submitter.pool, None);
             ManuallyDrop::drop(&mut self.allocator);
+            let _loader = loader_lock();
             self.raw.destroy_device(None);
         }
     }

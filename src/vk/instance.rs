@@ -1,7 +1,7 @@
 //! The Vulkan loader and instance, with the validation layer and its messenger when asked for.
 
 use std::ffi::{CStr, c_char};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use anyhow::{Context as _, Result, bail};
 use ash::vk;
@@ -13,6 +13,15 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 /// How to install a driver, for messages that report a machine without one.
 pub const INSTALL_HINT: &str = "install a Vulkan loader and driver, e.g. on Debian/Ubuntu \
     `sudo apt-get install libvulkan1 mesa-vulkan-drivers` (lavapipe, a CPU implementation), or your GPU vendor's driver";
+
+/// Held around every creation and destruction of an instance or a device, and every device-level function
+/// lookup. The loader keeps one process-wide list of devices that `vkCreateDevice` reads without the writer
+/// holding its lock (Vulkan-Loader issue 2018): devices opened and closed on several threads at once, as the
+/// tests do, crash in the loader even with an instance each. One device per process never contends for it.
+pub(crate) fn loader_lock() -> MutexGuard<'static, ()> {
+    static LOCK: Mutex<()> = Mutex::new(());
+    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// Owns the loader, the instance and (with validation) the debug messenger; destroys them in that reverse order.
 pub struct Instance {
@@ -60,6 +69,7 @@ impl Instance {
         if validation {
             info = info.push_next(&mut instance_messenger);
         }
+        let _loader = loader_lock();
         // SAFETY: every pointer in `info` outlives the call.
         let raw = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
             vk::Result::ERROR_INCOMPATIBLE_DRIVER => anyhow::anyhow!("no Vulkan driver found; {INSTALL_HINT}"),
@@ -91,6 +101,7 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
+        let _loader = loader_lock();
         // SAFETY: the owner (`Device`) has destroyed the logical device before dropping its instance.
         unsafe {
             if let Some((loader, messenger)) = self.debug.take() {

@@ -110,7 +110,10 @@ impl Swapchain {
             .into_iter()
             .find(|&a| caps.supported_composite_alpha.contains(a))
             .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
-        let loader = ash::khr::swapchain::Device::new(instance, &device.raw);
+        let loader = {
+            let _loader = super::instance::loader_lock();
+            ash::khr::swapchain::Device::new(instance, &device.raw)
+        };
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(surface.raw)
             .min_image_count(count)
