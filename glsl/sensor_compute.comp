@@ -5,10 +5,18 @@
 //   layer L of the batch ─▶ workgroup L:  for each tile of TILE² texels of the layer (one tile up to rd 32):
 //     for each view drawing into L (a hemicube side layer holds two half views), for each chunk of GROUP
 //     triangles (the whole soup, or the view's culled draw list, paper §9 clusters):
-//       set-up:  invocation i transforms triangle i of the chunk and keeps its homogeneous edge functions,
-//                depth plane and clip planes in shared memory;                            ── barrier
-//       raster:  every invocation tests the chunk's triangles at the texels it owns (TILE² / GROUP each),
-//                keeping the nearest in registers: no atomics, no shared depth buffer;    ── barrier
+//       set-up:  invocation i transforms triangle i of the chunk, keeps its homogeneous edge functions
+//                and depth plane in shared memory, and finds its span in each row of the tile it
+//                reaches (s_span: one row's span is found once, not by every invocation of the row); ── barrier
+//       raster:  every invocation depth-tests the chunk's triangles at the texels it owns (TILE² / GROUP
+//                each) inside their spans, keeping the nearest in registers: no atomics, no shared depth
+//                buffer;                                                                  ── barrier
+//
+//   s_span, a row's span of each triangle of the chunk (TILE words per triangle, rows the triangle's
+//   box misses unwritten):
+//     triangle 0: [row 0][row 1] … [row TILE-1]   word = (first texel + 1) | (last texel + 1) << 16
+//     triangle 1: [row 0][row 1] … [row TILE-1]   (empty: first > last)
+//     …
 //     shade: each invocation writes Ck of its texels' nearest triangle (sensor_shade.glsl), or the clear.
 //
 // Rasterization as Vulkan's: texel centres sampled, the top-left fill rule, reversed-Z depth tested GREATER
@@ -18,7 +26,7 @@
 // columns of the corners; a texel centre is inside when every λᵢ ≥ 0 and Σλ > 0 (then 1/Σλ is its W > 0),
 // so no triangle is clipped, even one crossing the eye's plane; λ/Σλ are its perspective-correct
 // barycentric coordinates and λ·Z its depth. Along a row each of these tests is linear in the texel, so
-// a triangle's texels in a row are one span (`raster`). Unlike the hardware, the corners are not snapped
+// a triangle's texels in a row are one span (`set_up`). Unlike the hardware, the corners are not snapped
 // to 1/256 of a texel: an edge that passes within that of a texel centre may be decided otherwise, so the
 // maps are not bit-identical to the graphics strategies' (docs/DESIGN.md §5).
 // variant: TEXTURES
@@ -51,9 +59,9 @@ layout(set = 0, binding = 12, rgba16f) uniform writeonly image2DArray maps;
 // The chunk's triangles after set-up. An empty box (x > z) marks no triangle.
 shared mat3 s_edges[GROUP];      // N⁻¹: λ = s_edges · (x, y, 1)
 shared vec3 s_depth[GROUP];      // clip z of the corners: depth = λ · s_depth
-shared vec3 s_clip[GROUP * 4u];  // each clip plane's distance at the corners (1, 1, 1 where all are inside)
-shared ivec4 s_box[GROUP];       // texels it may cover: min x, min y, max x, max y (inclusive)
+shared ivec4 s_box[GROUP];       // texels of the tile it may cover: min x, min y, max x, max y (inclusive)
 shared uvec4 s_corners[GROUP];   // vertex indices, and the view's index in the view buffer
+shared uint s_span[GROUP * TILE];  // its texels in each row of the tile (see the diagram above)
 
 // Nearest triangle so far at each texel this invocation owns (0: none; depths are > 0).
 float best_depth[PER_INVOCATION];
@@ -88,52 +96,6 @@ vec2 uv_at(uvec3 c, vec3 b) {
 vec3 barycentric(mat3 edges, ivec2 texel) {
     vec3 lambda = edges * ndc(texel);
     return lambda / (lambda.x + lambda.y + lambda.z);
-}
-
-// Set-up of triangle `c` (vertex indices) of view `v` by this invocation, or of none.
-void set_up(uint v, uvec3 c, bool valid) {
-    uint i = gl_LocalInvocationID.x;
-    s_box[i] = ivec4(1, 0, 0, 0);
-    if (!valid) {
-        return;
-    }
-    GpuSensorView view = views[v];
-    GpuSurface s = surfaces[floatBitsToUint(vertices[c.x].w)];
-    if ((view.flags & VIEW_EMITTERS_ONLY) != 0u && s.ke.w <= 0.0) {
-        return;
-    }
-    vec3 z;
-    mat3 world;
-    mat3 n = corners_in_view(view, c, z, world);
-    for (uint k = 0u; k < 4u; k++) {
-        vec3 d = vec3(dot(view.clip[k], vec4(world[0], 1.0)), dot(view.clip[k], vec4(world[1], 1.0)),
-                      dot(view.clip[k], vec4(world[2], 1.0)));
-        if (all(lessThan(d, vec3(0.0)))) {
-            return;  // wholly outside this plane
-        }
-        s_clip[i * 4u + k] = all(greaterThanEqual(d, vec3(0.0))) ? vec3(1.0) : d;
-    }
-    float det = determinant(n);
-    if (det == 0.0) {
-        return;  // seen edge-on: no area
-    }
-    // Texels it may cover: its projection's bounds where every corner is in front of the eye, else (it
-    // reaches behind, and its projection is unbounded) the whole layer.
-    ivec4 box = ivec4(0, 0, int(push.rd) - 1, int(push.rd) - 1);
-    vec3 w = vec3(n[0].z, n[1].z, n[2].z);
-    if (all(greaterThan(w, vec3(0.0)))) {
-        vec2 p0 = n[0].xy / n[0].z, p1 = n[1].xy / n[1].z, p2 = n[2].xy / n[2].z;
-        vec2 lo = (min(p0, min(p1, p2)) + 1.0) * (0.5 * float(push.rd)) - 0.5;
-        vec2 hi = (max(p0, max(p1, p2)) + 1.0) * (0.5 * float(push.rd)) - 0.5;
-        // (Clamped before the conversion: a corner just in front of the eye projects arbitrarily far.)
-        lo = clamp(ceil(lo), vec2(-1.0), vec2(push.rd));
-        hi = clamp(floor(hi), vec2(-1.0), vec2(push.rd));
-        box = ivec4(max(ivec2(lo), box.xy), min(ivec2(hi), box.zw));
-    }
-    s_edges[i] = inverse(n);
-    s_depth[i] = z;
-    s_corners[i] = uvec4(c, v);
-    s_box[i] = box;
 }
 
 // Narrows the texel range [lo, hi] of a row to where a·i + b ≥ 0 (i: the texel's index along the row).
@@ -172,19 +134,100 @@ void keep_edge(float a, float b, float down, inout float lo, inout float hi) {
     }
 }
 
+// Set-up of triangle `c` (vertex indices) of view `v` by this invocation, or of none, for the `side`² tile
+// at `origin`: its edge functions, depth plane and box, and its span in every row of the tile it reaches.
+// Along a row every test is linear in the texel's index i (λ(i) = i·ax + b), so each triangle's texels in
+// the row are one span, found from its constraints (inside its three edges by the fill rule, in front of
+// the eye, before the near plane, inside the view's clip planes) rather than by testing every texel.
+void set_up(uint v, uvec3 c, bool valid, ivec2 origin, uint side) {
+    uint i = gl_LocalInvocationID.x;
+    s_box[i] = ivec4(1, 0, 0, 0);
+    if (!valid) {
+        return;
+    }
+    GpuSensorView view = views[v];
+    GpuSurface s = surfaces[floatBitsToUint(vertices[c.x].w)];
+    if ((view.flags & VIEW_EMITTERS_ONLY) != 0u && s.ke.w <= 0.0) {
+        return;
+    }
+    vec3 z;
+    mat3 world;
+    mat3 n = corners_in_view(view, c, z, world);
+    vec3 clip[4];  // each clip plane's distance at the corners (1, 1, 1 where all are inside)
+    for (uint k = 0u; k < 4u; k++) {
+        vec3 d = vec3(dot(view.clip[k], vec4(world[0], 1.0)), dot(view.clip[k], vec4(world[1], 1.0)),
+                      dot(view.clip[k], vec4(world[2], 1.0)));
+        if (all(lessThan(d, vec3(0.0)))) {
+            return;  // wholly outside this plane
+        }
+        clip[k] = all(greaterThanEqual(d, vec3(0.0))) ? vec3(1.0) : d;
+    }
+    float det = determinant(n);
+    if (det == 0.0) {
+        return;  // seen edge-on: no area
+    }
+    // Texels it may cover: its projection's bounds where every corner is in front of the eye, else (it
+    // reaches behind, and its projection is unbounded) the whole layer.
+    ivec4 box = ivec4(0, 0, int(push.rd) - 1, int(push.rd) - 1);
+    vec3 w = vec3(n[0].z, n[1].z, n[2].z);
+    if (all(greaterThan(w, vec3(0.0)))) {
+        vec2 p0 = n[0].xy / n[0].z, p1 = n[1].xy / n[1].z, p2 = n[2].xy / n[2].z;
+        vec2 lo = (min(p0, min(p1, p2)) + 1.0) * (0.5 * float(push.rd)) - 0.5;
+        vec2 hi = (max(p0, max(p1, p2)) + 1.0) * (0.5 * float(push.rd)) - 0.5;
+        // (Clamped before the conversion: a corner just in front of the eye projects arbitrarily far.)
+        lo = clamp(ceil(lo), vec2(-1.0), vec2(push.rd));
+        hi = clamp(floor(hi), vec2(-1.0), vec2(push.rd));
+        box = ivec4(max(ivec2(lo), box.xy), min(ivec2(hi), box.zw));
+    }
+    // The box in the tile's texels.
+    box = ivec4(max(box.xy - origin, ivec2(0)), min(box.zw - origin, ivec2(side) - 1));
+    if (box.x > box.z || box.y > box.w) {
+        return;  // outside this tile
+    }
+    mat3 edges = inverse(n);
+    s_edges[i] = edges;
+    s_depth[i] = z;
+    s_corners[i] = uvec4(c, v);
+    s_box[i] = box;
+    // λ along a row: ax per texel, and at texel 0 of the tile, per row.
+    float h = 2.0 / float(push.rd);
+    vec3 ax = h * edges[0];
+    vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
+    vec3 down = h * edges[1];
+    for (int row = box.y; row <= box.w; row++) {
+        float yn = (float(origin.y + row) + 0.5) * h - 1.0;
+        vec3 b = at_origin + yn * edges[1];
+        float lo = float(box.x), hi = float(box.z);
+        for (int e = 0; e < 3; e++) {
+            keep_edge(ax[e], b[e], down[e], lo, hi);
+        }
+        keep(ax.x + ax.y + ax.z, b.x + b.y + b.z, lo, hi);  // in front of the eye
+        keep(-dot(z, ax), 1.0 - dot(z, b), lo, hi);  // beyond the near plane (depth ≤ 1)
+        for (uint k = 0u; k < 4u; k++) {
+            keep(dot(clip[k], ax), dot(clip[k], b), lo, hi);
+        }
+        ivec2 span = ivec2(clamp(vec2(ceil(lo), floor(hi)), vec2(-1.0), vec2(side))) + 1;  // (finite before int())
+        s_span[i * TILE + uint(row)] = uint(span.x) | (uint(span.y) << 16u);
+    }
+}
+
+// Triangle t's texels in row `row` of the tile: first and last (empty where first > last).
+ivec2 span_of(uint t, int row) {
+    uint word = s_span[t * TILE + uint(row)];
+    return ivec2(word & 0xffffu, word >> 16u) - 1;
+}
+
 // Tests this invocation's run of `slots` texels of the `side`² tile at `origin` against the chunk's `count`
-// triangles. Along a row every test is linear in the texel's index i (λ(i) = i·ax + b), so each triangle's
-// texels in the row are one span, found from its constraints (inside its three edges by the fill rule, in
-// front of the eye, before the near plane, inside the view's clip planes) rather than by testing every
-// texel; each texel of the span then only tests its depth.
+// triangles: only a triangle whose span in the run's row(s) (`set_up`) meets the run is read further, and
+// each texel of the span then only tests its depth.
 void raster(ivec2 origin, uint side, uint slots, uint count) {
     uint first = gl_LocalInvocationID.x * slots;
     if (first >= side * side) {
         return;
     }
-    // The run's rows: it may wrap once onto the next.
+    // The run's rows of the tile: it may wrap once onto the next.
     uint last = min(first + slots, side * side) - 1u;
-    ivec2 rows = ivec2(first / side, last / side) + origin.y;
+    ivec2 rows = ivec2(first / side, last / side);
     int x0 = int(first % side);
     float h = 2.0 / float(push.rd);
     for (uint t = 0u; t < count; t++) {
@@ -192,36 +235,25 @@ void raster(ivec2 origin, uint side, uint slots, uint count) {
         if (box.x > box.z || rows.y < box.y || rows.x > box.w) {
             continue;
         }
-        mat3 edges = s_edges[t];
-        vec3 depths = s_depth[t];
-        // λ along a row: ax per texel, and at texel 0 of the tile, per row.
-        vec3 ax = h * edges[0];
-        vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
-        vec2 span[2];
-        vec2 depth_line[2];
-        for (int r = 0; r < (rows.x == rows.y ? 1 : 2); r++) {
-            float yn = (float(rows[r]) + 0.5) * h - 1.0;
-            vec3 b = at_origin + yn * edges[1];
-            float lo = float(max(box.x - origin.x, 0)), hi = float(min(box.z - origin.x, int(side) - 1));
-            if (rows[r] < box.y || rows[r] > box.w) {
-                hi = -1.0;
-            }
-            vec3 down = h * edges[1];
-            for (int i = 0; i < 3; i++) {
-                keep_edge(ax[i], b[i], down[i], lo, hi);
-            }
-            keep(ax.x + ax.y + ax.z, b.x + b.y + b.z, lo, hi);  // in front of the eye
-            keep(-dot(depths, ax), 1.0 - dot(depths, b), lo, hi);  // beyond the near plane (depth ≤ 1)
-            for (uint c = 0u; c < 4u; c++) {
-                vec3 d = s_clip[t * 4u + c];
-                keep(dot(d, ax), dot(d, b), lo, hi);
-            }
-            span[r] = clamp(vec2(ceil(lo), floor(hi)), vec2(-1.0), vec2(side));  // (finite before int())
-            depth_line[r] = vec2(dot(depths, b), dot(depths, ax));
+        ivec2 span[2];
+        for (int r = 0; r < 2; r++) {
+            span[r] = rows[r] < box.y || rows[r] > box.w ? ivec2(0, -1) : span_of(t, rows[r]);
         }
         // Only the run's texels in the span (both rows' spans where it wraps).
-        int k_first = rows.x == rows.y ? max(int(span[0].x) - x0, 0) : 0;
-        int k_last = rows.x == rows.y ? min(int(span[0].y) - x0, int(slots) - 1) : int(slots) - 1;
+        int k_first = rows.x == rows.y ? max(span[0].x - x0, 0) : 0;
+        int k_last = rows.x == rows.y ? min(span[0].y - x0, int(slots) - 1) : int(slots) - 1;
+        if (k_first > k_last || (span[0].x > span[0].y && span[1].x > span[1].y)) {
+            continue;
+        }
+        mat3 edges = s_edges[t];
+        vec3 depths = s_depth[t];
+        vec3 ax = h * edges[0];
+        vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
+        vec2 depth_line[2];
+        for (int r = 0; r < 2; r++) {
+            vec3 b = at_origin + ((float(origin.y + rows[r]) + 0.5) * h - 1.0) * edges[1];
+            depth_line[r] = vec2(dot(depths, b), dot(depths, ax));
+        }
         for (uint k = uint(k_first); int(k) <= k_last; k++) {
             // (No integer division here: CPUs have no vector one, so it would run lane by lane.)
             int x = x0 + int(k), r = 0;
@@ -229,7 +261,7 @@ void raster(ivec2 origin, uint side, uint slots, uint count) {
                 x -= int(side);
                 r = 1;
             }
-            if (first + k > last || float(x) < span[r].x || float(x) > span[r].y) {
+            if (first + k > last || x < span[r].x || x > span[r].y) {
                 continue;
             }
             float depth = depth_line[r].x + float(x) * depth_line[r].y;
@@ -238,7 +270,7 @@ void raster(ivec2 origin, uint side, uint slots, uint count) {
             }
 #ifdef TEXTURES
             uvec3 corners = s_corners[t].xyz;
-            vec3 lambda = edges * ndc(ivec2(origin.x + x, rows[r]));
+            vec3 lambda = edges * ndc(ivec2(origin.x + x, origin.y + rows[r]));
             if (cut_out(surfaces[floatBitsToUint(vertices[corners.x].w)], uv_at(corners, lambda / dot(lambda, vec3(1.0))))) {
                 continue;
             }
@@ -257,7 +289,7 @@ void draw(uint v, uint first, uint count, bool indexed, int base, ivec2 origin, 
         uint corner = indexed ? first + 3u * t : 3u * (first + t);
         uvec3 c = indexed ? uvec3(ivec3(indices[corner], indices[corner + 1u], indices[corner + 2u]) + base)
                           : uvec3(corner, corner + 1u, corner + 2u);
-        set_up(v, t < count ? c : uvec3(0u), t < count);
+        set_up(v, t < count ? c : uvec3(0u), t < count, origin, side);
         barrier();
         raster(origin, side, slots, min(GROUP, count - chunk));
         barrier();

@@ -34,8 +34,8 @@ use crate::strategy::StrategyKind;
 use crate::vk::{Access, Buffer, DescriptorPool, Device, Encoder, Pipeline, PipelineLayout, barrier, compute};
 
 /// Shared memory the shader's workgroup uses (`glsl/sensor_compute.comp`: 128 triangles' set-up, its
-/// `vec3`s padded to 16 bytes as drivers may).
-pub const SHARED_BYTES: u32 = 128 * (48 + 16 + 4 * 16 + 16 + 16);
+/// `vec3`s padded to 16 bytes as drivers may, and their spans in the 32 rows of a tile).
+pub const SHARED_BYTES: u32 = 128 * (48 + 16 + 16 + 16 + 32 * 4);
 
 /// Bindings of the shader: 0–7 as every sensor shader (`SlotMaps::input_writer`), then the vertices,
 /// the clusters' indices, the draw lists and their counts, and the maps as a storage image.
