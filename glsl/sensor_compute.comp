@@ -134,6 +134,14 @@ void keep_edge(float a, float b, float down, inout float lo, inout float hi) {
     }
 }
 
+// λ of the triangle whose N⁻¹ is `edges` at texel 0 of `row` of the tile at `origin` (h: a texel's width in
+// normalized device coordinates); along the row λ steps by h · edges[0] a texel. Set-up (the spans) and
+// raster (the depths) both start a row here, so they agree on every texel.
+vec3 row_start(mat3 edges, ivec2 origin, int row, float h) {
+    vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
+    return at_origin + ((float(origin.y + row) + 0.5) * h - 1.0) * edges[1];
+}
+
 // Set-up of triangle `c` (vertex indices) of view `v` by this invocation, or of none, for the `side`² tile
 // at `origin`: its edge functions, depth plane and box, and its span in every row of the tile it reaches.
 // Along a row every test is linear in the texel's index i (λ(i) = i·ax + b), so each triangle's texels in
@@ -189,14 +197,11 @@ void set_up(uint v, uvec3 c, bool valid, ivec2 origin, uint side) {
     s_depth[i] = z;
     s_corners[i] = uvec4(c, v);
     s_box[i] = box;
-    // λ along a row: ax per texel, and at texel 0 of the tile, per row.
     float h = 2.0 / float(push.rd);
     vec3 ax = h * edges[0];
-    vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
     vec3 down = h * edges[1];
     for (int row = box.y; row <= box.w; row++) {
-        float yn = (float(origin.y + row) + 0.5) * h - 1.0;
-        vec3 b = at_origin + yn * edges[1];
+        vec3 b = row_start(edges, origin, row, h);
         float lo = float(box.x), hi = float(box.z);
         for (int e = 0; e < 3; e++) {
             keep_edge(ax[e], b[e], down[e], lo, hi);
@@ -235,24 +240,23 @@ void raster(ivec2 origin, uint side, uint slots, uint count) {
         if (box.x > box.z || rows.y < box.y || rows.x > box.w) {
             continue;
         }
+        // Only the run's texels in the span (both rows' spans where it wraps).
+        int wraps = rows.x == rows.y ? 0 : 1;
         ivec2 span[2];
-        for (int r = 0; r < 2; r++) {
+        for (int r = 0; r <= wraps; r++) {
             span[r] = rows[r] < box.y || rows[r] > box.w ? ivec2(0, -1) : span_of(t, rows[r]);
         }
-        // Only the run's texels in the span (both rows' spans where it wraps).
-        int k_first = rows.x == rows.y ? max(span[0].x - x0, 0) : 0;
-        int k_last = rows.x == rows.y ? min(span[0].y - x0, int(slots) - 1) : int(slots) - 1;
-        if (k_first > k_last || (span[0].x > span[0].y && span[1].x > span[1].y)) {
+        int k_first = wraps == 0 ? max(span[0].x - x0, 0) : 0;
+        int k_last = wraps == 0 ? min(span[0].y - x0, int(slots) - 1) : int(slots) - 1;
+        if (k_first > k_last || (wraps == 1 && span[0].x > span[0].y && span[1].x > span[1].y)) {
             continue;
         }
         mat3 edges = s_edges[t];
         vec3 depths = s_depth[t];
-        vec3 ax = h * edges[0];
-        vec3 at_origin = (float(origin.x) + 0.5) * h * edges[0] - edges[0] + edges[2];
+        float step = dot(depths, h * edges[0]);
         vec2 depth_line[2];
-        for (int r = 0; r < 2; r++) {
-            vec3 b = at_origin + ((float(origin.y + rows[r]) + 0.5) * h - 1.0) * edges[1];
-            depth_line[r] = vec2(dot(depths, b), dot(depths, ax));
+        for (int r = 0; r <= wraps; r++) {
+            depth_line[r] = vec2(dot(depths, row_start(edges, origin, rows[r], h)), step);
         }
         for (uint k = uint(k_first); int(k) <= k_last; k++) {
             // (No integer division here: CPUs have no vector one, so it would run lane by lane.)

@@ -115,9 +115,8 @@ impl Device {
         let allocator = match allocator {
             Ok(a) => a,
             Err(e) => {
-                let _loader = loader_lock();
                 // SAFETY: nothing was created from the device yet.
-                unsafe { raw.destroy_device(None) };
+                unsafe { destroy_raw(&raw) };
                 return Err(e).context("cannot create the memory allocator");
             }
         };
@@ -125,9 +124,8 @@ impl Device {
             Ok(s) => s,
             Err(e) => {
                 drop(allocator);
-                let _loader = loader_lock();
                 // SAFETY: the allocator (the only child) is gone.
-                unsafe { raw.destroy_device(None) };
+                unsafe { destroy_raw(&raw) };
                 return Err(e);
             }
         };
@@ -216,8 +214,17 @@ impl Drop for Device {
             self.raw.destroy_fence(submitter.fence, None);
             self.raw.destroy_command_pool(submitter.pool, None);
             ManuallyDrop::drop(&mut self.allocator);
-            let _loader = loader_lock();
-            self.raw.destroy_device(None);
+            destroy_raw(&self.raw);
         }
     }
+}
+
+/// Destroys a logical device under the loader's lock ([`loader_lock`]).
+///
+/// # Safety
+/// Every object created from `raw` is destroyed and no other thread uses it.
+unsafe fn destroy_raw(raw: &ash::Device) {
+    let _loader = loader_lock();
+    // SAFETY: the caller's.
+    unsafe { raw.destroy_device(None) };
 }
