@@ -1,6 +1,6 @@
 #version 460
 // The supersampling's resolve (docs/DESIGN.md §11): one invocation per supersampled pixel averages
-// Kd·R over its sub-pixel samples (the sky it sees where one leaves the scene, which the host put in its
+// Kd·R over its sub-pixel samples, each by the share of the square it stands for (the sky it sees where one leaves the scene, which the host put in its
 // albedo), adds the light its square
 // emits (exact, from the host) and writes that over
 // the composed image, its alpha the share of samples that met a surface. A sample's R is its donor's final
@@ -44,13 +44,14 @@ void main() {
         return;
     }
     // What the square emits is exact (the host clipped each emitter to it); the samples add what it reflects.
+    // Each sample stands for its share of the square (its weight: supersample/coverage.rs).
     vec3 image = vec3(0.0);
     vec3 r = vec3(0.0);
-    uint hits = 0u;
+    float hits = 0.0;
     for (uint k = 0u; k < push.samples; k++) {
         GpuSubSample s = samples[f * push.samples + k];
         if (s.position.w == 0.0) {
-            image += s.albedo.rgb;
+            image += s.weight * s.albedo.rgb;
             continue;
         }
         vec3 rs = composed[s.donor].rgb;
@@ -62,11 +63,10 @@ void main() {
                 : direct(donor_position.xyz, imageLoad(normals, d).xyz, s.donor_visibility);
             rs = max(rs + direct(s.position.xyz, s.normal.xyz, s.visibility) - at_donor, vec3(0.0));
         }
-        image += s.albedo.rgb * rs;
-        r += rs;
-        hits++;
+        image += s.weight * s.albedo.rgb * rs;
+        r += s.weight * rs;
+        hits += s.weight;
     }
-    float coverage = float(hits) / float(push.samples);
-    final_image[pixels[f].pixel] = vec4(pixels[f].emission.rgb + image / float(push.samples), coverage);
-    resolved[f] = vec4(r / float(max(hits, 1u)), coverage);
+    final_image[pixels[f].pixel] = vec4(pixels[f].emission.rgb + image, hits);
+    resolved[f] = vec4(hits > 0.0 ? r / hits : vec3(0.0), hits);
 }

@@ -197,7 +197,8 @@ struct GpuSubSample {
     vec4 normal;
     vec4 albedo;    // where the ray leaves the scene: the sky it sees
     uint donor;     // the pixel whose final R the sample takes
-    uint _pad[3];
+    float weight;   // the share of its pixel's square it stands for (supersample/coverage.rs)
+    uint _pad[2];
     float visibility[MAX_GROUPS];        // at the sample (< 0: not measured)
     float donor_visibility[MAX_GROUPS];  // at the donor
 };

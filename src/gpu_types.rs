@@ -319,7 +319,9 @@ pub struct GpuSubSample {
     pub albedo: [f32; 4],
     /// The pixel whose final R the sample takes: the nearest on the same surface (`supersample::donor`).
     pub donor: u32,
-    pub _pad: [u32; 3],
+    /// The share of its pixel's square the sample stands for (`supersample::coverage`).
+    pub weight: f32,
+    pub _pad: [u32; 2],
     /// With the exact light: each group's visibility at the sample, and at the donor (< 0: not measured).
     pub visibility: [f32; MAX_GROUPS],
     pub donor_visibility: [f32; MAX_GROUPS],

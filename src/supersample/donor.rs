@@ -8,11 +8,11 @@ use rayon::prelude::*;
 
 use super::detect::Point;
 use super::shadow::ShadowPoints;
-use super::{Plan, SAMPLES};
+use super::{Plan, SAMPLES, Samples, neighbourhood};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
+use crate::scene::NO_SURFACE;
 use crate::scene::bvh::Bvh;
-use crate::scene::{ImageSize, NO_SURFACE};
 use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::refine::Visibility;
 
@@ -33,8 +33,8 @@ pub struct SubSampleLight<'a> {
     pub near: f32,
 }
 
-/// The resolve's input for the supersampled pixels `range` of `plan`, one per sample of `samples` (what
-/// they see: `Plan::samples`), against the centres' G-buffer `g`:
+/// The resolve's input for the supersampled pixels `range` of `plan`, one per sample of `samples`
+/// (`Plan::samples`: what they see, where, and their weights), against the centres' G-buffer `g`:
 ///
 /// - the donor: among the pixel and its 8 neighbours, the nearest (centre to the sample's point) whose
 ///   centre shows the sample's surface alike (`detect::Point::alike`), else the nearest of the sample's
@@ -48,21 +48,22 @@ pub struct SubSampleLight<'a> {
 ///   the group's light the sample sees by shadow rays, and the donor's by the same rays (`shadow`).
 pub fn sub_samples(
     g: &GBufferData,
-    (plan, range, samples): (&Plan, Range<usize>, &GBufferData),
+    (plan, range, taken): (&Plan, Range<usize>, &Samples),
     light: Option<SubSampleLight<'_>>,
 ) -> Vec<GpuSubSample> {
-    let width = g.size.width;
+    let samples = &taken.seen;
     (0..samples.surface.len())
         .into_par_iter()
         .map(|s| {
             let (n, k) = (range.start + s / SAMPLES, s % SAMPLES);
-            let (sample, at) = (Point::of(samples, s), plan.point(n, k, width));
+            let (sample, at) = (Point::of(samples, s), taken.points[s]);
             let (donor, same_surface) = donor(g, plan.pixels[n], at, &sample);
             let mut record = GpuSubSample {
                 position: samples.position[s].to_array(),
                 normal: samples.normal[s].to_array(),
                 albedo: samples.albedo[s].to_array(),
                 donor,
+                weight: taken.weights[s],
                 ..Default::default()
             };
             if let Some(l) = light.as_ref().filter(|_| sample.surface != NO_SURFACE) {
@@ -92,8 +93,9 @@ pub fn sub_samples(
                     let offsets = (l.bias, l.near);
                     let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
                     let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
-                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, k);
-                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, k);
+                    let set = super::shadow::point_set(k, plan.pixels[n]);
+                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, set);
+                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, set);
                     for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0 && traced_donor[group] >= 0.0) {
                         record.visibility[group] = traced[group];
                         record.donor_visibility[group] = traced_donor[group];
@@ -219,16 +221,6 @@ fn donor(g: &GBufferData, pixel: u32, at: Vec2, sample: &Point) -> (u32, bool) {
         return (q, true);
     }
     (nearest(&|p| p.surface != NO_SURFACE).unwrap_or(pixel), false)
-}
-
-/// The pixels of `pixel`'s 3 × 3 neighbourhood in an image of `size` (itself included), row by row.
-fn neighbourhood(size: ImageSize, pixel: u32) -> impl Iterator<Item = usize> + Clone {
-    let (w, h) = (size.width as i64, size.height as i64);
-    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
-    (-1..=1)
-        .flat_map(move |dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
-        .filter(move |&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
-        .map(move |(qx, qy)| (qy * w + qx) as usize)
 }
 
 #[cfg(test)]

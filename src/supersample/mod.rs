@@ -31,6 +31,7 @@
 //! interpolation between centres makes twice too bright). Sensing each sample instead would cost
 //! SAMPLES sensors per edge pixel; measured in docs/ACCURACY.md "Every pixel right".
 
+mod coverage;
 mod detect;
 mod donor;
 mod emission;
@@ -41,6 +42,7 @@ use std::ops::Range;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+pub use coverage::COVERAGE_RAYS;
 pub use detect::{Flags, detect, light_ends};
 pub use donor::{SubSampleLight, sub_samples};
 pub use shadow::{SHADOW_RAYS, ShadowPoints};
@@ -86,12 +88,6 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// The continuous image point of sample `k` of the `n`-th supersampled pixel of an image `width` wide.
-    pub fn point(&self, n: usize, k: usize, width: u32) -> Vec2 {
-        let i = self.pixels[n];
-        Vec2::new((i % width) as f32, (i / width) as f32) + pattern()[k]
-    }
-
     /// `other`'s pixels (none of them in `self`) after `self`'s.
     pub fn append(&mut self, other: Plan) {
         self.pixels.extend(other.pixels);
@@ -106,11 +102,23 @@ impl Plan {
             .collect()
     }
 
-    /// What the samples of the supersampled pixels `range` see, [`SAMPLES`] a pixel in order (cast again
-    /// rather than kept from the plan: [`SLICE`]).
-    pub fn samples(&self, scene: &Scene, bvh: &Bvh, size: ImageSize, range: Range<usize>) -> GBufferData {
-        cast_points(scene, bvh, size, &points_of(&self.pixels[range], size.width))
+    /// The samples of the supersampled pixels `range`, [`SAMPLES`] a pixel in order (cast again rather than
+    /// kept from the plan: [`SLICE`]), weighed by what their surfaces cover (`coverage`).
+    /// `g`: the centres' G-buffer.
+    pub fn samples(&self, scene: &Scene, bvh: &Bvh, g: &GBufferData, range: Range<usize>) -> Samples {
+        let pixels = &self.pixels[range];
+        let points = points_of(pixels, g.size.width);
+        let seen = cast_points(scene, bvh, g.size, &points);
+        coverage::weigh((scene, bvh, g), pixels, seen, points)
     }
+}
+
+/// What some supersampled pixels' samples see ([`SAMPLES`] a pixel), where in the image they lie, and the
+/// share of its pixel's square each stands for (they sum to 1 over a pixel's samples).
+pub struct Samples {
+    pub seen: GBufferData,
+    pub points: Vec<Vec2>,
+    pub weights: Vec<f32>,
 }
 
 /// The image points of the samples of `pixels` (of an image `width` wide), [`SAMPLES`] each.
@@ -155,25 +163,18 @@ pub fn plan(scene: &Scene, bvh: &Bvh, g: &GBufferData, flags: &[Flags]) -> Plan 
     plan
 }
 
-/// Gives each sample of `samples` (those of `plan`'s pixels `range`, [`SAMPLES`] each, in an image `width`
-/// wide) that leaves the scene the sky it sees, `sky(its image point)`, in its albedo, where the resolve
-/// reads it.
-pub fn carry_sky(
-    samples: &mut [GpuSubSample],
-    (plan, range): (&Plan, Range<usize>),
-    width: u32,
-    sky: impl Fn(Vec2) -> Vec3 + Sync,
-) {
+/// Gives each sample of `samples` (at the image `points`) that leaves the scene the sky it sees,
+/// `sky(its image point)`, in its albedo, where the resolve reads it.
+pub fn carry_sky(samples: &mut [GpuSubSample], points: &[Vec2], sky: impl Fn(Vec2) -> Vec3 + Sync) {
     samples.par_iter_mut().enumerate().filter(|(_, s)| s.position[3] == 0.0).for_each(|(s, record)| {
-        let at = plan.point(range.start + s / SAMPLES, s % SAMPLES, width);
-        record.albedo = sky(at).extend(0.0).to_array();
+        record.albedo = sky(points[s]).extend(0.0).to_array();
     });
 }
 
 /// The resolve's CPU twin (`glsl/resolve.comp`): per supersampled pixel (`pixels`, each with [`SAMPLES`] of
-/// `samples`), the image: its exact emission plus `Kd·R` averaged over its samples (the sky it carries in its
-/// albedo where one leaves the scene); and R averaged over those that met a surface (the radiance AOV); each with alpha
-/// the share that did (coverage).
+/// `samples`), the image: its exact emission plus `Kd·R` over its samples, each by its weight (the sky it
+/// carries in its albedo where one leaves the scene); and R over those that met a surface, by their weights
+/// (the radiance AOV); each with alpha the weight of those that did (coverage).
 /// `composed`: every pixel's final R; `g`: the centres' G-buffer (the donors' positions); with `exact`,
 /// each light group's light is computed at the sample and at its donor (`lights`, sensors lifted by
 /// `bias`).
@@ -193,11 +194,11 @@ pub fn resolve_cpu(
     };
     (samples.chunks(SAMPLES).zip(pixels))
         .map(|(pixel, p)| {
-            let (mut image, mut r, mut hits) = (Vec3::ZERO, Vec3::ZERO, 0);
+            let (mut image, mut r, mut hits) = (Vec3::ZERO, Vec3::ZERO, 0.0);
             for s in pixel {
                 let position = Vec4::from(s.position);
                 if position.w == 0.0 {
-                    image += Vec4::from(s.albedo).truncate();
+                    image += s.weight * Vec4::from(s.albedo).truncate();
                     continue;
                 }
                 let d = s.donor as usize;
@@ -206,29 +207,39 @@ pub fn resolve_cpu(
                     let at_donor = direct(g.position[d], g.normal[d], &s.donor_visibility);
                     rs = (rs + direct(position, Vec4::from(s.normal), &s.visibility) - at_donor).max(Vec3::ZERO);
                 }
-                image += Vec4::from(s.albedo).truncate() * rs;
-                r += rs;
-                hits += 1;
+                image += s.weight * Vec4::from(s.albedo).truncate() * rs;
+                r += s.weight * rs;
+                hits += s.weight;
             }
-            let k = pixel.len() as f32;
-            let coverage = hits as f32 / k;
             let emitted = Vec4::from(p.emission).truncate();
-            ((emitted + image / k).extend(coverage), (r / hits.max(1) as f32).extend(coverage))
+            let mean_r = if hits > 0.0 { r / hits } else { Vec3::ZERO };
+            ((emitted + image).extend(hits), mean_r.extend(hits))
         })
         .collect()
 }
 
-/// The id most of a supersampled pixel's samples show (the lowest on a tie; the background only where
-/// most leave the scene): the `surface_id` AOV of a supersampled pixel.
-pub fn majority_id(ids: &[u32]) -> u32 {
-    let mut best = (0, NO_SURFACE);
+/// The id that covers most of a supersampled pixel's square, its samples' `ids` each weighing `weights`
+/// (the lowest on a tie; the background only where most of it leaves the scene): the `surface_id` AOV of a
+/// supersampled pixel.
+pub fn majority_id(ids: &[u32], weights: &[f32]) -> u32 {
+    let mut best = (0.0, NO_SURFACE);
     for &id in ids {
-        let count = ids.iter().filter(|&&other| other == id).count();
-        if count > best.0 || (count == best.0 && id < best.1) {
-            best = (count, id);
+        let share: f32 = ids.iter().zip(weights).filter(|(other, _)| **other == id).map(|(_, w)| w).sum();
+        if share > best.0 || (share == best.0 && id < best.1) {
+            best = (share, id);
         }
     }
     best.1
+}
+
+/// The pixels of `pixel`'s 3 × 3 neighbourhood in an image of `size` (itself included), row by row.
+pub(super) fn neighbourhood(size: ImageSize, pixel: u32) -> impl Iterator<Item = usize> + Clone {
+    let (w, h) = (size.width as i64, size.height as i64);
+    let (x, y) = ((pixel as i64) % w, (pixel as i64) / w);
+    (-1..=1)
+        .flat_map(move |dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        .filter(move |&(qx, qy)| qx >= 0 && qy >= 0 && qx < w && qy < h)
+        .map(move |(qx, qy)| (qy * w + qx) as usize)
 }
 
 #[cfg(test)]
@@ -247,9 +258,10 @@ mod tests {
     }
 
     #[test]
-    fn the_majority_id_wins_and_ties_go_to_the_lowest() {
-        assert_eq!(majority_id(&[3, 5, 5, 3, 5]), 5);
-        assert_eq!(majority_id(&[7, 2, 2, 7]), 2);
-        assert_eq!(majority_id(&[NO_SURFACE, NO_SURFACE, 4]), NO_SURFACE);
+    fn the_majority_id_covers_most_and_ties_go_to_the_lowest() {
+        assert_eq!(majority_id(&[3, 5, 5, 3, 5], &[0.2; 5]), 5);
+        assert_eq!(majority_id(&[7, 2, 2, 7], &[0.25; 4]), 2);
+        assert_eq!(majority_id(&[NO_SURFACE, NO_SURFACE, 4], &[0.3, 0.3, 0.4]), NO_SURFACE);
+        assert_eq!(majority_id(&[3, 5, 5, 5], &[0.7, 0.1, 0.1, 0.1]), 3, "by what they cover, not how many");
     }
 }
