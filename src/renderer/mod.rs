@@ -33,7 +33,7 @@ use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
-use crate::light::groups::Lights;
+use crate::light::groups::{Lights, luminance};
 use crate::params::{Antialiasing, EstimatorKind, FrameParams, Indirect, Param, ParamError, RenderParams};
 use crate::passes::compose::ComposePass;
 use crate::passes::filter::FilterPass;
@@ -547,13 +547,21 @@ impl Renderer {
         }
         let cache = config.cache.map(|c| {
             let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
-            let threshold = crate::gi::entries::LIGHT_VARIATION;
+            use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
+            // The lights' irradiance in closed form where it is cheap (as for the exact interpolation).
+            let few = lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
+            let irradiance = |p: Vec3, n: Vec3| lights.unoccluded(p + n * bias, n).iter().map(|&e| luminance(e)).sum();
             let varies = |points: &[Vec3], n: Vec3| {
-                let Some(lights) = &light_points else { return false };
+                let Some(hinted) = &light_points else { return false };
                 [n, -n].iter().any(|&n| {
-                    let seen = points.iter().map(|&p| hints::mask(&bvh, lights, (p, n), bias, near).count_ones());
+                    let seen = points.iter().map(|&p| hints::mask(&bvh, hinted, (p, n), bias, near).count_ones());
                     let (lo, hi) = seen.fold((u32::MAX, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
-                    (hi - lo) as f32 > threshold * lights.len() as f32
+                    (hi - lo) as f32 > LIGHT_VARIATION * hinted.len() as f32
+                        || few && {
+                            let e = points.iter().map(|&p| irradiance(p, n));
+                            let (dim, bright) = e.fold((f32::MAX, 0.0f32), |(lo, hi), e: f32| (lo.min(e), hi.max(e)));
+                            bright > IRRADIANCE_VARIATION * dim
+                        }
                 })
             };
             RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies))

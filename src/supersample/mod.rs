@@ -10,11 +10,13 @@
 //!  1. detect    pixels whose 3×3 neighbourhood differs (id, normal, depth, emission; the light hints'
 //!               share of a group jumps) or that a triangle thinner than a pixel touches     (detect.rs)
 //!  2. cast      SAMPLES camera rays per such pixel at fixed points of its square, on the CPU's BVH; a
-//!               pixel whose samples all agree with its centre, and whose light is even, is dropped
+//!               pixel whose samples all agree with its centre, and whose light is even, is dropped;
+//!               where two surfaces meet, a denser net of rays weighs each sample by the share of the
+//!               square its surface covers                                                 (coverage.rs)
 //!  3. donors    after sensing: each sample takes the final R of the nearest pixel on its surface, with
 //!               the light groups' exact light recomputed at the sample (donor.rs); where a group's light
 //!               is uneven around the pixel, its visibility there by shadow rays            (shadow.rs)
-//!  4. resolve   on the GPU after composition: the pixel is the mean of Le + Kd·R over its samples, the
+//!  4. resolve   on the GPU after composition: the pixel is Le + Kd·R over its samples by weight, the
 //!               sky along its ray where a sample leaves the scene         (glsl/resolve.comp, resolve_cpu)
 //!  5. ends      then the pixels far darker than a neighbour on their surface, as sensed and resolved
 //!               (the light ends inside them: `light_ends`), planned and resolved the same way
