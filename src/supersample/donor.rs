@@ -93,9 +93,8 @@ pub fn sub_samples(
                     let offsets = (l.bias, l.near);
                     let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
                     let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
-                    let set = super::shadow::point_set(k, plan.pixels[n]);
-                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, set);
-                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, set);
+                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, k);
+                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, k);
                     for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0 && traced_donor[group] >= 0.0) {
                         record.visibility[group] = traced[group];
                         record.donor_visibility[group] = traced_donor[group];

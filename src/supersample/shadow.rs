@@ -8,8 +8,7 @@
 //! pixel instead casts [`SHADOW_RAYS`] rays to points on the group, and its donor the same rays, so that the
 //! sample's light differs from the donor's by what the rays see differently: where both see the same points
 //! the difference is exact. The points are interleaved over a pixel's samples ([`ShadowPoints::of_sample`]):
-//! together a pixel's samples cast [`SHADOW_RAYS`] × `SAMPLES` rays at as many points of the group, each
-//! sample's set chosen by a permutation that changes from pixel to pixel ([`point_set`]).
+//! together a pixel's samples cast [`SHADOW_RAYS`] × `SAMPLES` rays at as many points of the group.
 
 use glam::Vec3;
 
@@ -101,38 +100,9 @@ impl ShadowPoints {
     }
 }
 
-/// Which of a pixel's [`SAMPLES`] sets of points its sample `k` casts at: a permutation of the sample
-/// indices that changes from pixel to pixel (a few invertible steps on 6 bits, salted by the pixel). With
-/// set `k` for sample `k`, a sample's place in the square (x = k/64) and its set's offset on the light (an
-/// additive recurrence in k) lay on one lattice: at a penumbra's end, where a pixel sees one percent of the
-/// light, the pairing made some pixels twice too bright (the small light, 320 × 240, direct light: the
-/// whole image 1.49 % → 1.42 % with the permutation).
-pub fn point_set(k: usize, pixel: u32) -> usize {
-    const { assert!(SAMPLES.is_power_of_two(), "the steps are invertible on log2(SAMPLES) bits") };
-    let mask = SAMPLES - 1;
-    let h = (pixel as usize).wrapping_mul(0x9E37_79B9) ^ (pixel as usize >> 7).wrapping_mul(0x85EB_CA6B);
-    let mut x = (k ^ h) & mask;
-    x = (x.wrapping_mul(29).wrapping_add(h >> 6)) & mask;
-    x ^= x >> 3;
-    x = (x.wrapping_mul(45).wrapping_add(h >> 12)) & mask;
-    x ^= x >> 2;
-    x
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn each_pixel_gives_its_samples_every_set_once_in_its_own_order() {
-        let order = |pixel: u32| (0..SAMPLES).map(|k| point_set(k, pixel)).collect::<Vec<_>>();
-        for pixel in [0, 1, 2, 319, 76_799, u32::MAX] {
-            let mut sets = order(pixel);
-            sets.sort();
-            assert_eq!(sets, (0..SAMPLES).collect::<Vec<_>>(), "pixel {pixel}: a permutation");
-        }
-        assert!((1..100).all(|pixel| order(pixel) != order(0)), "the order changes from pixel to pixel");
-    }
     use crate::scene::ImageSize;
     use crate::scene::builtin::lightbox;
     use crate::sensors::frame;
