@@ -48,10 +48,12 @@ void main() {
     vec3 image = vec3(0.0);
     vec3 r = vec3(0.0);
     float hits = 0.0;
+    float misses = 0.0;
     for (uint k = 0u; k < push.samples; k++) {
         GpuSubSample s = samples[f * push.samples + k];
         if (s.position.w == 0.0) {
             image += s.weight * s.albedo.rgb;
+            misses += s.weight;
             continue;
         }
         vec3 rs = composed[s.donor].rgb;
@@ -67,6 +69,8 @@ void main() {
         r += s.weight * rs;
         hits += s.weight;
     }
-    final_image[pixels[f].pixel] = vec4(pixels[f].emission.rgb + image, hits);
-    resolved[f] = vec4(hits > 0.0 ? r / hits : vec3(0.0), hits);
+    // The share on a surface, exactly 1 where no sample leaves the scene (the weights' sum is 1 ± rounding).
+    float coverage = hits / max(hits + misses, 1e-30);
+    final_image[pixels[f].pixel] = vec4(pixels[f].emission.rgb + image, coverage);
+    resolved[f] = vec4(hits > 0.0 ? r / hits : vec3(0.0), coverage);
 }

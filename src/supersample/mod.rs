@@ -196,11 +196,12 @@ pub fn resolve_cpu(
     };
     (samples.chunks(SAMPLES).zip(pixels))
         .map(|(pixel, p)| {
-            let (mut image, mut r, mut hits) = (Vec3::ZERO, Vec3::ZERO, 0.0);
+            let (mut image, mut r, mut hits, mut misses) = (Vec3::ZERO, Vec3::ZERO, 0.0, 0.0);
             for s in pixel {
                 let position = Vec4::from(s.position);
                 if position.w == 0.0 {
                     image += s.weight * Vec4::from(s.albedo).truncate();
+                    misses += s.weight;
                     continue;
                 }
                 let d = s.donor as usize;
@@ -215,7 +216,9 @@ pub fn resolve_cpu(
             }
             let emitted = Vec4::from(p.emission).truncate();
             let mean_r = if hits > 0.0 { r / hits } else { Vec3::ZERO };
-            ((emitted + image).extend(hits), mean_r.extend(hits))
+            // Exactly 1 where no sample leaves the scene (the weights' sum is 1 ± rounding).
+            let coverage = hits / f32::max(hits + misses, 1e-30);
+            ((emitted + image).extend(coverage), mean_r.extend(coverage))
         })
         .collect()
 }
