@@ -7,7 +7,7 @@ use glam::Vec2;
 use rayon::prelude::*;
 
 use super::detect::Point;
-use super::shadow::ShadowPoints;
+use super::shadow::{ShadowPoints, point_set};
 use super::{Plan, SAMPLES, Samples, neighbourhood};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
@@ -45,7 +45,8 @@ pub struct SubSampleLight<'a> {
 ///   the share of the group's hint points in front of the sample that it sees, or the donor's where none
 ///   is in front; but for the groups whose light is uneven around the sample (every group where the plan
 ///   flags the pixel's light or no centre shows the sample's surface, else [`uneven`]), the share of
-///   the group's light the sample sees by shadow rays, and the donor's by the same rays (`shadow`).
+///   the group's light the sample sees by shadow rays (`shadow`), and the donor's as it was sensed (what
+///   its R holds), or by the same rays where it was not measured.
 pub fn sub_samples(
     g: &GBufferData,
     (plan, range, taken): (&Plan, Range<usize>, &Samples),
@@ -91,13 +92,28 @@ pub fn sub_samples(
                 let groups = if plan.light[n] { all } else { uneven(g, l, plan.pixels[n], &sample).unwrap_or(all) };
                 if groups != 0 {
                     let offsets = (l.bias, l.near);
+                    let set = point_set(k, plan.pixels[n]);
                     let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
-                    let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
-                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, k);
-                    let traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, groups, k);
-                    for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0 && traced_donor[group] >= 0.0) {
-                        record.visibility[group] = traced[group];
-                        record.donor_visibility[group] = traced_donor[group];
+                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, set);
+                    // The donor's light is taken out as it was sensed (what its R holds); by the same rays
+                    // only where it was not measured.
+                    let unmeasured = (0..MAX_GROUPS)
+                        .filter(|&group| groups & (1 << group) != 0 && donor_visibility[group] < 0.0)
+                        .fold(0, |mask, group| mask | 1 << group);
+                    let traced_donor = match unmeasured {
+                        0 => [-1.0; MAX_GROUPS],
+                        _ => {
+                            let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
+                            l.shadow.visibility(l.bvh, at_donor, offsets, unmeasured, set)
+                        }
+                    };
+                    for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0) {
+                        if donor_visibility[group] >= 0.0 {
+                            record.visibility[group] = traced[group];
+                        } else if traced_donor[group] >= 0.0 {
+                            record.visibility[group] = traced[group];
+                            record.donor_visibility[group] = traced_donor[group];
+                        }
                     }
                 }
             }

@@ -5,10 +5,14 @@
 //! from the centres, a pixel whose centre sees none of the light but whose square reaches into the penumbra
 //! came out twice as bright as its square's mean on the small light's floor (most of that scene's error over
 //! the whole image), and the light hints' 16 points are too coarse to place the kink. Each sample of such a
-//! pixel instead casts [`SHADOW_RAYS`] rays to points on the group, and its donor the same rays, so that the
-//! sample's light differs from the donor's by what the rays see differently: where both see the same points
-//! the difference is exact. The points are interleaved over a pixel's samples ([`ShadowPoints::of_sample`]):
-//! together a pixel's samples cast [`SHADOW_RAYS`] × `SAMPLES` rays at as many points of the group.
+//! pixel instead casts [`SHADOW_RAYS`] rays to points on the group: its light from the group is the rays'
+//! share times the group's irradiance there, and the donor's is taken out of the donor's R as it was
+//! sensed (what that R holds). Taking the donor's out by the same rays instead (the difference exact where
+//! both see the same points) kept the sensor's own error at a penumbra's end in every sample: the Cornell
+//! box's interior (direct light, 256²) 2.18 % against 1.97 % now. The points are interleaved over a
+//! pixel's samples ([`ShadowPoints::of_sample`]): together a pixel's samples cast [`SHADOW_RAYS`] ×
+//! `SAMPLES` rays at as many points of the group, each sample's set chosen by a permutation that changes
+//! from pixel to pixel ([`point_set`]).
 
 use glam::Vec3;
 
@@ -100,9 +104,38 @@ impl ShadowPoints {
     }
 }
 
+/// Which of a pixel's [`SAMPLES`] sets of points its sample `k` casts at: a permutation of the sample
+/// indices that changes from pixel to pixel (a few invertible steps on 6 bits, salted by the pixel). With
+/// set `k` for sample `k`, a sample's place in the square (x = k/64) and its set's offset on the light (an
+/// additive recurrence in k) lie on one lattice: at a penumbra's end, where a pixel sees one percent of the
+/// light, the pairing made some pixels twice too bright. With the permutation (and the donor's sensed light
+/// taken out) the small light's whole image (direct light, 320 × 240) is 0.84 % off instead of 0.96 %.
+pub fn point_set(k: usize, pixel: u32) -> usize {
+    const { assert!(SAMPLES.is_power_of_two(), "the steps are invertible on log2(SAMPLES) bits") };
+    let mask = SAMPLES - 1;
+    let h = (pixel as usize).wrapping_mul(0x9E37_79B9) ^ (pixel as usize >> 7).wrapping_mul(0x85EB_CA6B);
+    let mut x = (k ^ h) & mask;
+    x = (x.wrapping_mul(29).wrapping_add(h >> 6)) & mask;
+    x ^= x >> 3;
+    x = (x.wrapping_mul(45).wrapping_add(h >> 12)) & mask;
+    x ^= x >> 2;
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_pixel_gives_its_samples_every_set_once_in_its_own_order() {
+        let order = |pixel: u32| (0..SAMPLES).map(|k| point_set(k, pixel)).collect::<Vec<_>>();
+        for pixel in [0, 1, 2, 319, 76_799, u32::MAX] {
+            let mut sets = order(pixel);
+            sets.sort();
+            assert_eq!(sets, (0..SAMPLES).collect::<Vec<_>>(), "pixel {pixel}: a permutation");
+        }
+        assert!((1..100).all(|pixel| order(pixel) != order(0)), "the order changes from pixel to pixel");
+    }
     use crate::scene::ImageSize;
     use crate::scene::builtin::lightbox;
     use crate::sensors::frame;
