@@ -1,9 +1,9 @@
 #version 460
-// The supersampling's resolve (docs/DESIGN.md §11): one invocation per supersampled pixel averages
-// Kd·R over its sub-pixel samples, each by the share of the square it stands for (the sky it sees where one leaves the scene, which the host put in its
-// albedo), adds the light its square
-// emits (exact, from the host) and writes that over
-// the composed image, its alpha the share of samples that met a surface. A sample's R is its donor's final
+// The supersampling's resolve (docs/DESIGN.md §11): one invocation per supersampled pixel sums Kd·R
+// over its sub-pixel samples, each by the share of the square it stands for (the sky it sees where one
+// leaves the scene, which the host put in its albedo), adds the light its square emits (exact, from the
+// host) and writes that over the composed image, its alpha the share of the square on a surface
+// (coverage). A sample's R is its donor's final
 // R (a neighbouring pixel on its surface); with the exact light, the light groups' light is recomputed at
 // the sample: R(s) = R(d) + Σ_g (E_g(s)·V_g(s) − E_g(d)·V_g(d)) / π, E_g in closed form (group_light.glsl),
 // V_g chosen by the host (src/supersample/donor.rs). CPU twin: src/supersample/mod.rs resolve_cpu.

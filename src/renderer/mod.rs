@@ -31,6 +31,7 @@ pub use stats::{RenderStats, RenderTimes};
 use crate::cancel::Reason;
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
+use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
 use crate::light::groups::{Lights, luminance};
@@ -547,7 +548,6 @@ impl Renderer {
         }
         let cache = config.cache.map(|c| {
             let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
-            use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
             // The lights' irradiance in closed form where it is cheap (as for the exact interpolation).
             let few = lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
             let irradiance = |p: Vec3, n: Vec3| lights.unoccluded(p + n * bias, n).iter().map(|&e| luminance(e)).sum();

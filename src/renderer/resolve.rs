@@ -37,7 +37,7 @@ impl Renderer {
         let averaged = map_buffer(&device, "supersampled radiance", ImageSize { width: slice, height: 1 })?;
         for start in (0..plan.pixels.len()).step_by(SLICE) {
             let range = start..(start + SLICE).min(plan.pixels.len());
-            let seen = plan.samples(&self.host, &self.bvh, g, range.clone());
+            let taken = plan.samples(&self.host, &self.bvh, g, range.clone());
             let sample_light = (light.zip(self.light_points.as_deref()).zip(self.shadow_points.as_ref())).map(
                 |(((visibility, hints, bits), points), shadow)| SubSampleLight {
                     visibility,
@@ -50,9 +50,9 @@ impl Renderer {
                     near,
                 },
             );
-            let mut samples = supersample::sub_samples(g, (plan, range.clone(), &seen), sample_light);
+            let mut samples = supersample::sub_samples(g, (plan, range.clone(), &taken), sample_light);
             let camera = &self.host.camera;
-            supersample::carry_sky(&mut samples, &seen.points, |at| match &self.host.sky {
+            supersample::carry_sky(&mut samples, &taken.points, |at| match &self.host.sky {
                 Some(sky) => sky.radiance(camera.ray(at.x, at.y, g.size.width, g.size.height).dir),
                 None => background,
             });
@@ -71,12 +71,13 @@ impl Renderer {
                 Ok(())
             })?;
             resolved.extend(transfer::read_buffer::<Vec4>(&device, &averaged, range.len())?);
-            for (n, (ids, weights)) in seen.seen.surface.chunks(SAMPLES).zip(seen.weights.chunks(SAMPLES)).enumerate() {
+            for (n, (ids, weights)) in taken.seen.surface.chunks(SAMPLES).zip(taken.weights.chunks(SAMPLES)).enumerate()
+            {
                 let id = supersample::majority_id(ids, weights);
                 let centre = g.surface[plan.pixels[range.start + n] as usize];
                 majority.push((id != centre).then(|| {
                     let s = n * SAMPLES + ids.iter().position(|&i| i == id).unwrap_or(0);
-                    let seen = &seen.seen;
+                    let seen = &taken.seen;
                     Visible {
                         position: seen.position[s],
                         normal: seen.normal[s],

@@ -44,7 +44,6 @@ use std::ops::Range;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use coverage::COVERAGE_RAYS;
 pub use detect::{Flags, detect, light_ends};
 pub use donor::{SubSampleLight, sub_samples};
 pub use shadow::{SHADOW_RAYS, ShadowPoints};

@@ -126,6 +126,10 @@ pub fn point_set(k: usize, pixel: u32) -> usize {
 mod tests {
     use super::*;
 
+    use crate::scene::ImageSize;
+    use crate::scene::builtin::lightbox;
+    use crate::sensors::frame;
+
     #[test]
     fn each_pixel_gives_its_samples_every_set_once_in_its_own_order() {
         let order = |pixel: u32| (0..SAMPLES).map(|k| point_set(k, pixel)).collect::<Vec<_>>();
@@ -136,9 +140,6 @@ mod tests {
         }
         assert!((1..100).all(|pixel| order(pixel) != order(0)), "the order changes from pixel to pixel");
     }
-    use crate::scene::ImageSize;
-    use crate::scene::builtin::lightbox;
-    use crate::sensors::frame;
 
     /// On the light box's floor: in the open every ray sees the light, at the block's foot none, and in its
     /// penumbra a pixel's 1 024 points agree with a dense independent quadrature of the light (a 256 × 256
