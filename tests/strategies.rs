@@ -241,56 +241,65 @@ fn bad_bench_arguments_are_clear_errors() {
     }
 }
 
-/// Every strategy renders the shipped scenes at their defaults (96 × 96): R is per-sensor's bit for bit, the
-/// same sensors sensed, for each strategy `auto` may take (identical on the probe, rasterizing as
-/// per-sensor does), and within 1e-3 relative RMSE for the atlas (whose tiles' offsets round window
-/// coordinates differently). A strategy that fails its check is refused (`agrees_with_per_sensor`).
+/// Every strategy renders the shipped Cornell box alike at its defaults (see [`every_strategy_renders_alike`]).
 #[test]
-fn every_strategy_renders_the_shipped_scenes_alike_at_defaults() {
-    for file in ["scenes/cornell/cornell.toml", "scenes/cornell-mcguire/cornell-mcguire.toml"] {
-        let path = common::project(file);
-        let scene = sensorlight::scene::Scene::load(&path).unwrap();
-        let defaults = sensorlight::params::Overrides::from_scene_table(&path, &scene.render).unwrap();
-        let params = sensorlight::params::RenderParams::resolve(Some((&path, &defaults)), &Default::default()).unwrap();
-        let size = ImageSize { width: 96, height: 96 };
-        common::gpu(|device| {
-            let render = |kind| {
-                let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
-                    .estimator(params.estimator_kind)
-                    .radiance_cache(renderer::CacheConfig::for_params(&params))
-                    .build_unchecked(kind)
-                    .unwrap();
-                let out = renderer.render(size, &params.frame(), &renderer::Quiet).unwrap();
-                (out.radiance, out.stats.sensors)
+fn every_strategy_renders_the_shipped_cornell_box_alike_at_defaults() {
+    every_strategy_renders_alike("scenes/cornell/cornell.toml");
+}
+
+/// Every strategy renders the third-party Cornell box with its two spheres alike at its defaults.
+#[test]
+fn every_strategy_renders_the_third_party_cornell_box_alike_at_defaults() {
+    every_strategy_renders_alike("scenes/cornell-mcguire/cornell-mcguire.toml");
+}
+
+/// Every strategy renders `file` at its defaults (96 × 96, global illumination included, so the radiance
+/// cache's sensors too): R is per-sensor's bit for bit, the same sensors sensed, for each strategy `auto`
+/// may take (identical on the probe, rasterizing as per-sensor does), and within 1e-3 relative RMSE for the
+/// atlas (whose tiles' offsets round window coordinates differently). A strategy that fails its check is
+/// refused (`agrees_with_per_sensor`). One test per scene, so that the two run side by side.
+fn every_strategy_renders_alike(file: &str) {
+    let path = common::project(file);
+    let scene = sensorlight::scene::Scene::load(&path).unwrap();
+    let defaults = sensorlight::params::Overrides::from_scene_table(&path, &scene.render).unwrap();
+    let params = sensorlight::params::RenderParams::resolve(Some((&path, &defaults)), &Default::default()).unwrap();
+    let size = ImageSize { width: 96, height: 96 };
+    common::gpu(|device| {
+        let render = |kind| {
+            let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
+                .estimator(params.estimator_kind)
+                .radiance_cache(renderer::CacheConfig::for_params(&params))
+                .build_unchecked(kind)
+                .unwrap();
+            let out = renderer.render(size, &params.frame(), &renderer::Quiet).unwrap();
+            (out.radiance, out.stats.sensors)
+        };
+        let (reference, sensors) = render(StrategyKind::PerSensor);
+        for kind in StrategyKind::ALL.into_iter().filter(|&k| k != StrategyKind::PerSensor) {
+            // Unsupported or failing its check: refused by name and by auto (`agrees_with_per_sensor`).
+            let Ok(check) = renderer::self_check(device, params.estimator.sensor, params.estimator_kind, kind) else {
+                continue;
             };
-            let (reference, sensors) = render(StrategyKind::PerSensor);
-            for kind in StrategyKind::ALL.into_iter().filter(|&k| k != StrategyKind::PerSensor) {
-                // Unsupported or failing its check: refused by name and by auto (`agrees_with_per_sensor`).
-                let Ok(check) = renderer::self_check(device, params.estimator.sensor, params.estimator_kind, kind)
-                else {
-                    continue;
-                };
-                if !check.passed {
-                    continue;
-                }
-                let (r, n) = render(kind);
-                let bits = |v: &[Vec4]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
-                if check.identical && kind.rasterizes_like_per_sensor() {
-                    assert_eq!(n, sensors, "{file}: {kind} senses other pixels than per-sensor");
-                    let differing = bits(&r).chunks(4).zip(bits(&reference).chunks(4)).filter(|(a, b)| a != b).count();
-                    assert_eq!(differing, 0, "{file}: {kind}: {differing} pixels differ from per-sensor");
-                } else {
-                    let rmse = (r.iter().zip(&reference).filter(|(_, b)| b.x + b.y + b.z > 0.0).map(|(a, b)| {
-                        let (ya, yb) = (a.x + a.y + a.z, b.x + b.y + b.z);
-                        ((ya - yb) / yb).powi(2) as f64
-                    }))
-                    .fold((0.0, 0usize), |(s, n), e| (s + e, n + 1));
-                    let rmse = (rmse.0 / rmse.1.max(1) as f64).sqrt();
-                    assert!(rmse <= 1e-3, "{file}: {kind}: relative RMSE {rmse:.2e} from per-sensor");
-                }
+            if !check.passed {
+                continue;
             }
-        });
-    }
+            let (r, n) = render(kind);
+            let bits = |v: &[Vec4]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            if check.identical && kind.rasterizes_like_per_sensor() {
+                assert_eq!(n, sensors, "{file}: {kind} senses other pixels than per-sensor");
+                let differing = bits(&r).chunks(4).zip(bits(&reference).chunks(4)).filter(|(a, b)| a != b).count();
+                assert_eq!(differing, 0, "{file}: {kind}: {differing} pixels differ from per-sensor");
+            } else {
+                let rmse = (r.iter().zip(&reference).filter(|(_, b)| b.x + b.y + b.z > 0.0).map(|(a, b)| {
+                    let (ya, yb) = (a.x + a.y + a.z, b.x + b.y + b.z);
+                    ((ya - yb) / yb).powi(2) as f64
+                }))
+                .fold((0.0, 0usize), |(s, n), e| (s + e, n + 1));
+                let rmse = (rmse.0 / rmse.1.max(1) as f64).sqrt();
+                assert!(rmse <= 1e-3, "{file}: {kind}: relative RMSE {rmse:.2e} from per-sensor");
+            }
+        }
+    });
 }
 
 /// Multiview is verified where a driver does it right: Mesa 25's lavapipe (CI runs the tests on it) must
