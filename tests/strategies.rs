@@ -241,29 +241,30 @@ fn bad_bench_arguments_are_clear_errors() {
     }
 }
 
-/// Every strategy renders the shipped Cornell box alike at its defaults (see [`every_strategy_renders_alike`]).
+/// Every strategy renders the shipped Cornell box alike (see [`every_strategy_renders_alike`]).
 #[test]
-fn every_strategy_renders_the_shipped_cornell_box_alike_at_defaults() {
+fn every_strategy_renders_the_shipped_cornell_box_alike() {
     every_strategy_renders_alike("scenes/cornell/cornell.toml");
 }
 
-/// Every strategy renders the third-party Cornell box with its two spheres alike at its defaults.
+/// Every strategy renders the third-party Cornell box with its two spheres alike.
 #[test]
-fn every_strategy_renders_the_third_party_cornell_box_alike_at_defaults() {
+fn every_strategy_renders_the_third_party_cornell_box_alike() {
     every_strategy_renders_alike("scenes/cornell-mcguire/cornell-mcguire.toml");
 }
 
-/// Every strategy renders `file` at its defaults (96 × 96, global illumination included, so the radiance
-/// cache's sensors too, over two bounces): R is per-sensor's bit for bit, the same sensors sensed, for each strategy `auto`
-/// may take (identical on the probe, rasterizing as per-sensor does), and within 1e-3 relative RMSE for the
-/// atlas (whose tiles' offsets round window coordinates differently). A strategy that fails its check is
-/// refused (`agrees_with_per_sensor`). One test per scene, so that the two run side by side.
+/// Every strategy renders `file` at its defaults but for two cache bounces (96 × 96, global illumination
+/// included, so the radiance cache's sensors too): R is per-sensor's bit for bit, the same sensors sensed,
+/// for each strategy `auto` may take (identical on the probe, rasterizing as per-sensor does), and within
+/// 1e-3 relative RMSE for the atlas (whose tiles' offsets round window coordinates differently). A strategy
+/// that fails its check is refused (`agrees_with_per_sensor`). One test per scene, so that the two run side
+/// by side.
 fn every_strategy_renders_alike(file: &str) {
     let path = common::project(file);
     let scene = sensorlight::scene::Scene::load(&path).unwrap();
-    let defaults = sensorlight::params::Overrides::from_scene_table(&path, &scene.render).unwrap();
-    // Two bounces take the cache's sensors through both of its map sizes (rd 32, then rd 16) as the default
-    // `auto` does before it extrapolates on the host; the other six would only repeat them.
+    let defaults = Overrides::from_scene_table(&path, &scene.render).unwrap();
+    // Two bounces take the cache's sensors through both of its map sizes (rd 32, then rd 16), as the first
+    // two of the default's do; its later bounces would only repeat them.
     let flags = Overrides { bounces: Some(Bounces::Fixed(2)), ..Default::default() };
     let params = sensorlight::params::RenderParams::resolve(Some((&path, &defaults)), &flags).unwrap();
     let size = ImageSize { width: 96, height: 96 };
