@@ -34,6 +34,7 @@ layout(std430, set = 0, binding = 25) buffer SupersampledPixels { GpuSupersample
 layout(std430, set = 0, binding = 26) buffer Textures { GpuTexture textures[]; };
 layout(std430, set = 0, binding = 27) buffer Skies { GpuSky skies[]; };
 layout(std430, set = 0, binding = 28) buffer SensorComputePushes { SensorComputePush sensor_compute_pushes[]; };
+layout(std430, set = 0, binding = 29) buffer TransportPushes { TransportPush transport_pushes[]; };
 
 void main() {
     // Touch every array so the compiler keeps the types.
@@ -66,4 +67,5 @@ void main() {
     textures[1] = textures[0];
     skies[1] = skies[0];
     sensor_compute_pushes[1] = sensor_compute_pushes[0];
+    transport_pushes[1] = transport_pushes[0];
 }

@@ -73,7 +73,9 @@ void main() {
     // The main layers: Ck (the rest, in the exact estimator) weighted by the precomputed texel weights.
     GpuSensor frame = sensors[sensor];
     vec3 sum = vec3(0.0);
-    for (uint layer = 0u; layer < push.main_layers; layer++) {
+    // Main layers drawn with the cache's entries (the transport's rows) hold no light.
+    uint main_layers = push.main_entries != 0u ? 0u : push.main_layers;
+    for (uint layer = 0u; layer < main_layers; layer++) {
         ivec3 origin = map_origin(sensor, layer);
         uint weight_base = layer * rd * rd;
         for (uint y = thread.y; y < rd; y += 8u) {

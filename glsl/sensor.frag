@@ -24,6 +24,7 @@ layout(location = 2) flat in float in_group;
 layout(location = 3) in vec3 in_world;
 layout(location = 4) flat in uint in_surface;
 layout(location = 5) flat in vec3 in_eye;
+layout(location = 7) flat in uint in_flags;
 #ifdef TEXTURES
 layout(location = 6) in vec2 in_uv;
 #endif
@@ -37,6 +38,7 @@ void main() {
     t.world = in_world;
     t.surface = in_surface;
     t.eye = in_eye;
+    t.zoom = (in_flags & VIEW_ZOOM) != 0u;
     t.front_facing = gl_FrontFacing;
 #ifdef TEXTURES
     t.uv = in_uv;

@@ -25,6 +25,7 @@ layout(location = 2) flat out float out_group;  // light group + 1 of an emitter
 layout(location = 3) out vec3 out_world;        // where the texel sees the surface: the cache's key
 layout(location = 4) flat out uint out_surface;
 layout(location = 5) flat out vec3 out_eye;          // the view's origin
+layout(location = 7) flat out uint out_flags;        // the view's VIEW_* flags
 #ifdef TEXTURES
 layout(location = 6) out vec2 out_uv;  // where the texture and the cut-out are read
 #endif
@@ -44,6 +45,7 @@ vec4 sensor_vertex(GpuSensorView view, out float clip_distance[4]) {
     out_world = in_position;
     out_surface = in_surface;
     out_eye = view.eye.xyz;
+    out_flags = view.flags;
 #ifdef TEXTURES
     out_uv = (s.kd_map | s.ke_map | s.alpha_map) != 0u ? uvs[gl_VertexIndex] : vec2(0.0);
 #endif

@@ -321,6 +321,7 @@ void shade(uint layer, ivec2 origin, uint side, uint slots, uint k) {
         sensor_sides(surfaces[t.surface], push.sensor, t.ck_front, t.ck_back, t.group);
         t.world = world * b;
         t.eye = view.eye.xyz;
+        t.zoom = (view.flags & VIEW_ZOOM) != 0u;
         t.front_facing = determinant(n) < 0.0;
 #ifdef TEXTURES
         // uv's steps along x and y as the fragment shader's dFdx, dFdy: coarse, from the texel's 2 × 2 quad

@@ -4,8 +4,9 @@
 //   back, or front of a non-emitter: Kd * epsilon;
 //   front of an emitter: Ke (the paper's estimator), or 0 and its light group (the exact one, whose
 //   emitter light is computed in closed form and only its visibility read from the map);
-// with global illumination (push.cache, epsilon 0) the radiance cache's reflected light at the point seen,
-// on either side. With TEXTURES the including shader declares `surfaces` and the texture bindings
+// with global illumination (push.cache CACHE_VALUES, epsilon 0) the radiance cache's reflected light at the
+// point seen, on either side; with CACHE_ENTRIES instead of any light, which of the cache's values that is
+// (the radiance cache's transport, src/gi/transport.rs). With TEXTURES the including shader declares `surfaces` and the texture bindings
 // (texture.glsl).
 #ifndef SENSOR_SHADE_GLSL
 #define SENSOR_SHADE_GLSL
@@ -22,6 +23,7 @@ struct SensorTexel {
     uint surface;
     vec3 eye;
     bool front_facing;
+    bool zoom;  // in a zoom view, whose texels are read only for their light group
     vec2 uv;
     vec2 dx;
     vec2 dy;
@@ -56,7 +58,16 @@ bool sensor_shade(SensorTexel t, SensorPush p, out vec4 ck) {
     }
 #endif
     ck = emitter_front ? vec4(front, t.group) : vec4((t.front_facing ? front : t.ck_back) * scale, 0.0);
-    if (p.cache != 0u) {
+    if (t.zoom) {
+        // Only the light groups are read here: no cache.
+    } else if (p.cache == CACHE_ENTRIES) {
+        // Which value the texel reads, in three channels of CACHE_ENTRY_BITS (integers below 2048 are exact
+        // in half floats); emitter fronts keep their group for the zoom views' visibilities.
+        uint v = cache_lookup(t.world, t.eye, t.surface, t.front_facing);
+        uint mask = (1u << CACHE_ENTRY_BITS) - 1u;
+        vec3 digits = vec3(uvec3(v, v >> CACHE_ENTRY_BITS, v >> (2u * CACHE_ENTRY_BITS)) & mask);
+        ck = vec4(digits, ck.a > 0.0 ? ck.a : CACHE_ENTRY_MARK);
+    } else if (p.cache == CACHE_VALUES) {
         vec3 reflected = cached_radiance(t.world, t.eye, t.surface, t.front_facing) * scale;
         ck.rgb += ck.a > 0.0 ? reflected / p.emission_scale : reflected;
     }

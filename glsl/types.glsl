@@ -36,6 +36,7 @@ struct GpuSensorView {
 };
 
 const uint VIEW_EMITTERS_ONLY = 1u;
+const uint VIEW_ZOOM = 2u;  // a zoom view: only its texels' light groups are read
 
 struct GpuSensor {
     vec4 origin;  // w: frustum half-width tan(fov/2), 0 for the hemisphere
@@ -91,8 +92,17 @@ struct SensorPush {
     uint layer_base;     // subtracted from a view's layer (layered strategies)
     uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
     float emission_scale;  // the paper's: emitter fronts leave Ke / emission_scale (a power of two, f16 range)
-    uint cache;          // 1: surfaces return the radiance cache's reflected light (cache.glsl); 0: Kd * epsilon
+    uint cache;          // CACHE_*: what surfaces return besides Kd * epsilon
 };
+
+// SensorPush.cache (src/passes/sensor_maps CacheRead): nothing; the radiance cache's reflected light where
+// the texel sees it (cache.glsl); or which of the cache's values it reads (CACHE_ENTRY_BITS a channel,
+// alpha CACHE_ENTRY_MARK on a surface, an emitter front's group + 1 kept), for the transport's rows.
+const uint CACHE_OFF = 0u;
+const uint CACHE_VALUES = 1u;
+const uint CACHE_ENTRIES = 2u;
+const uint CACHE_ENTRY_BITS = 11u;
+const float CACHE_ENTRY_MARK = 0.5;
 
 // The compute strategy's push (src/passes/sensor_maps/compute.rs, sensor_compute.comp).
 struct SensorComputePush {
@@ -141,8 +151,19 @@ struct ReducePush {
     uint groups;         // light groups measured (0: the paper's estimator)
     uint chunks;         // emitter chunks of the scene: the stride of the irradiance per sensor
     float emission_scale;  // emitter-front texels (alpha > 0) are multiplied by it (the maps' Ke scale)
-    uint _pad;
+    uint main_entries;   // 1: the main layers hold cache entries (CACHE_ENTRIES), no light: they add nothing
 };
+
+// The transport rows' pass (src/passes/transport.rs, transport.comp).
+struct TransportPush {
+    uint rd;             // sensor map side
+    uint layers;         // layers per sensor
+    uint main_layers;    // the layers copied
+    uint atlas_columns;  // 0: maps are array layers; else tiles of one atlas, this many per row
+};
+
+// A texel that sees no surface, in transport.comp's texel list.
+const uint TRANSPORT_NONE = 0xffffffffu;
 
 // Bilinear fill of [x0, own_x1] x [y0, own_y1] from the sensed corners (x0|x1, y0|y1).
 struct GpuQuad {

@@ -82,13 +82,16 @@ pub struct GpuSensorView {
     pub eye: Vec4,
     /// Layer of the sensor-map array this view writes (within its sensor until a strategy places it).
     pub layer: u32,
-    /// [`VIEW_EMITTERS_ONLY`] or 0.
+    /// [`VIEW_EMITTERS_ONLY`], [`VIEW_ZOOM`], or 0.
     pub flags: u32,
     pub _pad: [u32; 2],
 }
 
 /// A view that draws only the emitters (the unoccluded half of a zoom pair).
 pub const VIEW_EMITTERS_ONLY: u32 = 1;
+/// A zoom view (either of a pair): the reduction reads only which light group its texels see, so its
+/// fragments skip the radiance cache (`glsl/sensor_shade.glsl`).
+pub const VIEW_ZOOM: u32 = 2;
 
 /// What the reduction needs of one sensor of a batch: where it sits and its domain.
 #[repr(C)]
@@ -275,8 +278,28 @@ pub struct ReducePush {
     pub chunks: u32,
     /// What texels of an emitter's front (alpha > 0) are multiplied by: the maps' `emission_scale`.
     pub emission_scale: f32,
-    pub _pad: u32,
+    /// 1: the main layers hold the cache's entries (`CacheRead::Entries`), no light: they add nothing.
+    pub main_entries: u32,
 }
+
+/// Push constants of the transport rows' pass (`passes::transport`, `glsl/transport.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TransportPush {
+    /// Sensor map side, texels.
+    pub rd: u32,
+    /// Layers per sensor, and the main layers among them (the ones copied).
+    pub layers: u32,
+    pub main_layers: u32,
+    /// 0: sensor maps are layers of a 2D array. Otherwise tiles of one atlas with this many per row.
+    pub atlas_columns: u32,
+}
+
+/// Bits of a cache value's index per channel of a map drawn with `CacheRead::Entries` (`glsl/types.glsl`
+/// `CACHE_ENTRY_BITS`: integers below 2¹¹ are exact in half floats).
+pub const CACHE_ENTRY_BITS: u32 = 11;
+/// A texel that sees no surface in the transport pass's texel list (`glsl/types.glsl` `TRANSPORT_NONE`).
+pub const TRANSPORT_NONE: u32 = u32::MAX;
 
 /// A quad of the adaptive refinement whose pixels are filled by bilinear interpolation (paper §III-G).
 /// Corners are sensed pixels; the quad fills `[x0, own_x1] × [y0, own_y1]` (its share of shared edges).
@@ -409,6 +432,12 @@ impl GpuSensorView {
 
     pub fn emitters_only(mut self) -> Self {
         self.flags |= VIEW_EMITTERS_ONLY;
+        self
+    }
+
+    /// Marked as a zoom view ([`VIEW_ZOOM`]).
+    pub fn zoom(mut self) -> Self {
+        self.flags |= VIEW_ZOOM;
         self
     }
 }

@@ -8,7 +8,7 @@ use sensorlight::gpu_types::{
     ComposePush, CullPush, EmitterPush, ExactInterpolatePush, GBufferPush, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit,
     GpuCluster, GpuCullNode, GpuDrawCommand, GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuQuad, GpuSensor,
     GpuSensorResult, GpuSensorView, GpuSky, GpuSubSample, GpuSupersampledPixel, GpuSurface, GpuTexture, GpuZoom,
-    ImagePush, ReducePush, ResolvePush, SensorComputePush, SensorPush,
+    ImagePush, ReducePush, ResolvePush, SensorComputePush, SensorPush, TransportPush,
 };
 use sensorlight::shaders;
 
@@ -89,7 +89,16 @@ fn shared_structs_match_glsl() {
         (
             4,
             "ReducePush",
-            rust_layout!(ReducePush: rd, layers, main_layers, atlas_columns, groups, chunks, emission_scale, _pad),
+            rust_layout!(
+                ReducePush: rd,
+                layers,
+                main_layers,
+                atlas_columns,
+                groups,
+                chunks,
+                emission_scale,
+                main_entries
+            ),
         ),
         (5, "GpuQuad", rust_layout!(GpuQuad: x0, y0, x1, y1, own_x1, own_y1, _pad)),
         (6, "ImagePush", rust_layout!(ImagePush: width, height, radius, count)),
@@ -185,6 +194,7 @@ fn shared_structs_match_glsl() {
                 _pad
             ),
         ),
+        (29, "TransportPush", rust_layout!(TransportPush: rd, layers, main_layers, atlas_columns)),
     ];
     assert_eq!(glsl.len(), rust.len(), "layout_probe.comp and this test list different structs");
     for (binding, name, expected) in rust {

@@ -17,6 +17,7 @@
 pub mod entries;
 pub mod grid;
 pub mod solve;
+pub mod transport;
 
 use glam::{Vec3, Vec4};
 

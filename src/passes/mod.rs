@@ -11,6 +11,7 @@ pub mod interpolate;
 pub mod reduce;
 pub mod resolve;
 pub mod sensor_maps;
+pub mod transport;
 
 use ash::vk;
 

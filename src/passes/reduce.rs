@@ -101,8 +101,9 @@ impl ReducePass {
             .apply(device);
     }
 
-    /// Records the reduction of the first `count` sensors of slot `slot`'s batch, whose maps lie as `layout`.
-    pub fn record(&self, enc: &Encoder<'_>, slot: usize, layout: MapLayout, count: u32) {
+    /// Records the reduction of the first `count` sensors of slot `slot`'s batch, whose maps lie as `layout`;
+    /// `entries`: their main layers hold the radiance cache's entries (`CacheRead::Entries`), no light.
+    pub fn record(&self, enc: &Encoder<'_>, slot: usize, (layout, entries): (MapLayout, bool), count: u32) {
         let atlas_columns = match layout {
             MapLayout::Layers => 0,
             MapLayout::Atlas { columns } => columns,
@@ -115,7 +116,7 @@ impl ReducePass {
             groups: self.layout.groups,
             chunks: self.chunks,
             emission_scale: self.emission_scale,
-            _pad: 0,
+            main_entries: entries as u32,
         };
         self.kernel.dispatch(enc, slot, &push, [count, 1, 1]);
     }

@@ -28,7 +28,8 @@ use crate::gpu_types::{CullPush, GpuSensor, GpuSensorResult, GpuZoom};
 use crate::passes::cull::{CullBindings, CullPass};
 use crate::passes::emitters::{EmitterBindings, EmitterPass};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
-use crate::passes::sensor_maps::{self, CkParams, SlotMaps, Strategy, StrategyDesc};
+use crate::passes::sensor_maps::{self, CacheRead, CkParams, SlotMaps, Strategy, StrategyDesc};
+use crate::passes::transport::TransportPass;
 use crate::scene::Aabb;
 use crate::sensors::SensorKind;
 use crate::sensors::frame::{self, SensorFrame};
@@ -67,8 +68,18 @@ pub struct SensedMaps {
     pub indirect: Arc<Buffer>,
 }
 
-/// Receives each completed batch: its sensors' pixels and what the reduction found there.
-pub(crate) type Deliver<'a> = &'a mut dyn FnMut(&[u32], &[GpuSensorResult]);
+/// A completed batch, as the host reads it back.
+pub(crate) struct Sensed<'a> {
+    /// Its sensors' pixels, and what the reduction found there.
+    pub pixels: &'a [u32],
+    pub results: &'a [GpuSensorResult],
+    /// Drawn with [`CacheRead::Entries`]: the cache value each texel of each sensor's main layers sees
+    /// (`passes::transport`, [`BatchRunner::texels_per_sensor`] a sensor); else empty.
+    pub texels: &'a [u32],
+}
+
+/// Receives each completed batch.
+pub(crate) type Deliver<'a> = &'a mut dyn FnMut(&Sensed<'_>);
 
 struct Slot {
     commands: CommandSlot,
@@ -82,9 +93,14 @@ struct Slot {
     irradiance: Buffer,
     /// R and visibilities of each sensor of the batch (`GpuSensorResult`), device-written, host-read.
     results: Buffer,
+    /// With [`BatchRunner::with_rows`]: the cache value each main-layer texel sees, device-written,
+    /// host-read, for batches drawn with [`CacheRead::Entries`].
+    texels: Option<Buffer>,
     timestamps: Option<TimestampQueries>,
     /// Pixels of the batch in flight; empty when the slot is idle.
     in_flight: Vec<u32>,
+    /// Whether the batch in flight was drawn with [`CacheRead::Entries`].
+    entries: bool,
 }
 
 /// The culling pass and the clusters and tree it reads, when the maps are drawn from them.
@@ -102,6 +118,9 @@ pub(crate) struct BatchRunner {
     emitters: Option<EmitterPass>,
     culling: Option<Culling>,
     reduce: ReducePass,
+    /// Copies the texels' cache entries, where the runner reads the transport's rows
+    /// ([`BatchRunner::with_rows`]).
+    transport: Option<TransportPass>,
     /// How far a sensor sits above its surface, and its views' near plane (world units).
     bias: f32,
     near: f32,
@@ -165,8 +184,10 @@ impl BatchRunner {
                         size_of::<GpuSensorResult>() as u64 * capacity,
                         MemoryLocation::GpuToCpu,
                     )?,
+                    texels: None,
                     timestamps: TimestampQueries::new(device, TIMESTAMPS)?,
                     in_flight: Vec::new(),
+                    entries: false,
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -200,6 +221,7 @@ impl BatchRunner {
             emitters,
             culling,
             reduce,
+            transport: None,
             bias,
             near,
             desc,
@@ -209,6 +231,31 @@ impl BatchRunner {
             device: device.clone(),
             times: BatchTimes::default(),
         })
+    }
+
+    /// The runner, able to sense with [`CacheRead::Entries`] too: each slot gets a texel list, a `u32` per
+    /// texel of its sensors' main layers (half its maps' colour bytes at most).
+    pub fn with_rows(mut self) -> Result<Self> {
+        let pass = TransportPass::new(&self.device, &self.desc, self.slots.len() as u32)?;
+        let bytes = 4 * (pass.texels_per_sensor() * self.capacity() as usize) as u64;
+        for (i, slot) in self.slots.iter_mut().enumerate() {
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let texels = Buffer::new(&self.device, "texel entries", bytes, usage, MemoryLocation::GpuToCpu)?;
+            pass.bind(&self.device, i, &slot.maps.maps, &texels);
+            slot.texels = Some(texels);
+        }
+        self.transport = Some(pass);
+        Ok(self)
+    }
+
+    /// Texels of one sensor in [`Sensed::texels`]: its main layers', each `rd × rd`, row by row.
+    pub fn texels_per_sensor(&self) -> usize {
+        (self.desc.layout.main_layers() * self.desc.rd * self.desc.rd) as usize
+    }
+
+    /// The layout of its sensors (kind and light groups).
+    pub fn layout(&self) -> crate::sensors::layout::SensorLayout {
+        self.desc.layout
     }
 
     pub fn kind(&self) -> StrategyKind {
@@ -271,6 +318,8 @@ impl BatchRunner {
     /// pixels and results to `deliver`. Returns with up to all slots' batches still in flight.
     pub fn sense(&mut self, g: &GBufferData, pixels: &[u32], ck: CkParams, deliver: Deliver<'_>) -> Result<()> {
         let radiance = self.radiance.clone().context("sense before bind: no radiance map to write")?;
+        let entries = ck.cache == CacheRead::Entries;
+        ensure!(!entries || self.transport.is_some(), "sensing the cache's entries needs a runner with_rows");
         for chunk in pixels.chunks(self.capacity() as usize) {
             let index = self.next;
             self.next = (self.next + 1) % self.slots.len();
@@ -288,6 +337,7 @@ impl BatchRunner {
                 .collect();
             let views = BatchViews::new(&frames, &self.desc.layout, self.near, &self.groups, self.desc.rd);
             let (strategy, emitters, reduce, culling) = (&self.strategy, &self.emitters, &self.reduce, &self.culling);
+            let transport = self.transport.as_ref().filter(|_| entries);
             let (rd, near) = (self.desc.rd, self.near);
             let slot = &mut self.slots[index];
             slot.pixels.write(0, chunk)?;
@@ -320,7 +370,10 @@ impl BatchRunner {
                 strategy.record(enc, maps, &views, ck)?;
                 stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 barrier::global(enc, &[Access::ColorAttachmentWrite, Access::ComputeWrite], &[Access::ComputeRead]);
-                reduce.record(enc, index, strategy.map_layout(), chunk.len() as u32);
+                reduce.record(enc, index, (strategy.map_layout(), entries), chunk.len() as u32);
+                if let Some(t) = transport {
+                    t.record(enc, index, strategy.map_layout(), chunk.len() as u32);
+                }
                 stamp(3, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 // The results (and the radiance map) are read by the host, or copied, once the fence signals.
                 barrier::global(enc, &[Access::ComputeWrite], &[Access::HostRead, Access::TransferRead]);
@@ -333,6 +386,7 @@ impl BatchRunner {
                 slot.commands.retire(read.clone());
             }
             slot.in_flight = chunk.to_vec();
+            slot.entries = entries;
             self.times.batches += 1;
             self.times.host_record += start.elapsed();
         }
@@ -352,7 +406,7 @@ impl BatchRunner {
     ) -> Result<()> {
         for chunk in pixels.chunks(self.capacity().max(1) as usize) {
             if let Some(reason) = stop() {
-                self.drain(&mut |_, _| ())?;
+                self.drain(&mut |_| ())?;
                 return Err(Cancelled(reason).into());
             }
             self.sense(g, chunk, ck, deliver)?;
@@ -371,6 +425,7 @@ impl BatchRunner {
 
     /// Waits for slot `index`'s batch, if any, and delivers its results and times.
     fn retire(&mut self, index: usize, deliver: Deliver<'_>) -> Result<()> {
+        let per_sensor = self.texels_per_sensor();
         let slot = &mut self.slots[index];
         self.times.host_wait += slot.commands.wait()?;
         if slot.in_flight.is_empty() {
@@ -379,6 +434,11 @@ impl BatchRunner {
         let pixels = std::mem::take(&mut slot.in_flight);
         let r: Vec<GpuSensorResult> = slot.results.read(pixels.len())?;
         self.times.readback_bytes += size_of_val(r.as_slice()) as u64;
+        let texels: Vec<u32> = match (&slot.texels, slot.entries) {
+            (Some(t), true) => t.read(pixels.len() * per_sensor)?,
+            _ => Vec::new(),
+        };
+        self.times.readback_bytes += size_of_val(texels.as_slice()) as u64;
         if let Some(t) = slot.timestamps.as_ref().map(TimestampQueries::read_seconds).transpose()?.flatten() {
             let add = |total: &mut Option<Duration>, seconds: f64| {
                 *total = Some(total.unwrap_or_default() + Duration::from_secs_f64(seconds.max(0.0)));
@@ -405,14 +465,14 @@ impl BatchRunner {
             }
             *total += counts[views..].iter().map(|&n| n as u64).sum::<u64>();
         }
-        deliver(&pixels, &r);
+        deliver(&Sensed { pixels: &pixels, results: &r, texels: &texels });
         Ok(())
     }
 
     /// Runs the reduction alone over slot 0's first `count` sensors again (their maps are still in place
     /// after a sense), into a scratch radiance map; returns the time from submission to completion.
     pub fn time_reduction(&mut self, count: u32) -> Result<Duration> {
-        self.drain(&mut |_, _| ())?;
+        self.drain(&mut |_| ())?;
         let count = count.min(self.capacity());
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let scratch = Buffer::new(&self.device, "scratch radiance", 16 * count as u64, usage, MemoryLocation::GpuOnly)?;
@@ -437,7 +497,7 @@ impl BatchRunner {
         self.radiance = None; // slot 0 no longer writes the bound map: bind again before sensing
         let layout = self.strategy.map_layout();
         let time = self.device.submit_and_wait(|enc| {
-            self.reduce.record(enc, 0, layout, count);
+            self.reduce.record(enc, 0, (layout, false), count);
             Ok(())
         })?;
         Ok(time)

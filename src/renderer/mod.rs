@@ -23,8 +23,8 @@ use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 
 pub use batch::BatchTimes;
-use batch::{BatchRunner, SensedMaps};
-pub use gi::{BounceDone, GiStats};
+use batch::{BatchRunner, Sensed, SensedMaps};
+pub use gi::{BounceDone, GiStats, LaterBounces};
 pub use probe::probe_pixels;
 pub use stats::{RenderStats, RenderTimes};
 
@@ -33,7 +33,7 @@ use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
 use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuSensorResult, MAX_GROUPS};
+use crate::gpu_types::MAX_GROUPS;
 use crate::light::groups::{Lights, luminance};
 use crate::params::{Antialiasing, EstimatorKind, FrameParams, Indirect, Param, ParamError, RenderParams};
 use crate::passes::compose::ComposePass;
@@ -41,7 +41,7 @@ use crate::passes::filter::FilterPass;
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass};
 use crate::passes::interpolate::{self, InterpolatePass};
 use crate::passes::resolve::ResolvePass;
-use crate::passes::sensor_maps::{Background, CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
+use crate::passes::sensor_maps::{Background, CacheRead, CkParams, EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene, Texture, texture};
 use crate::sensors::SensorKind;
@@ -591,7 +591,11 @@ impl Renderer {
             bvh,
             light_points,
             shadow_points,
-            runner: BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?,
+            runner: {
+                let runner = BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?;
+                // The radiance cache's first bounce reads the transport's rows from its maps.
+                if cache.is_some() { runner.with_rows()? } else { runner }
+            },
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
             compose: ComposePass::new(device)?,
@@ -675,7 +679,8 @@ impl Renderer {
              paper's ε only",
         )?;
         let runners = gi::Runners { first: &mut self.runner, later };
-        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), (bounces, background), progress)?;
+        let light = (bounces, background, crate::gi::transport::DEFAULT_BUDGET);
+        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), light, progress)?;
         self.cache_solved = true;
         Ok(Some(stats))
     }
@@ -694,7 +699,8 @@ impl Renderer {
 
     /// What the sensor maps see on surfaces for `frame`: its ε, or the radiance cache once solved.
     fn ck(&self, frame: &FrameParams) -> CkParams {
-        let cache = self.cache_solved && frame.indirect.bounces().is_some();
+        let solved = self.cache_solved && frame.indirect.bounces().is_some();
+        let cache = if solved { CacheRead::Values } else { CacheRead::Off };
         CkParams { epsilon: frame.indirect.epsilon(), background: self.background(frame), cache }
     }
 
@@ -710,8 +716,7 @@ impl Renderer {
         let (_, g) = self.render_gbuffer(size)?;
         self.runner.bind(&SensedMaps::new(&self.device, size)?)?;
         let mut r = vec![Vec4::ZERO; g.surface.len()];
-        let mut deliver =
-            |p: &[u32], found: &[GpuSensorResult]| p.iter().zip(found).for_each(|(&i, f)| r[i as usize] = f.r);
+        let mut deliver = |b: &Sensed<'_>| b.pixels.iter().zip(b.results).for_each(|(&i, f)| r[i as usize] = f.r);
         let start = Instant::now();
         let ck = self.ck(frame);
         self.runner.sense(&g, pixels, ck, &mut deliver)?;
@@ -838,8 +843,8 @@ impl Renderer {
             if !pending.is_empty() {
                 progress.queued(pending.len() as u64);
                 let read_before = self.runner.times.readback_bytes;
-                let mut deliver = |p: &[u32], found: &[GpuSensorResult]| {
-                    for (&i, f) in p.iter().zip(found) {
+                let mut deliver = |b: &Sensed<'_>| {
+                    for (&i, f) in b.pixels.iter().zip(b.results) {
                         r[i as usize] = f.r;
                         if exact {
                             visibility[i as usize] = f.visibility;
@@ -848,7 +853,7 @@ impl Renderer {
                             rest[i as usize] = f.rest;
                         }
                     }
-                    progress.done(p.len() as u64);
+                    progress.done(b.pixels.len() as u64);
                 };
                 self.runner.sense_or_stop(&g, &pending, ck, &mut deliver, &|| progress.cancelled())?;
                 self.runner.drain(&mut deliver)?;

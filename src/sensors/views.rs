@@ -59,7 +59,8 @@ impl BatchViews {
                 let (scene, alone) = (layout.zoom_layer(g as u32, false), layout.zoom_layer(g as u32, true));
                 match Zoom::towards(frame.origin, frame.n, bounds, frame.b, 2.0 / rd as f32) {
                     Some(zoom) => {
-                        let view = GpuSensorView::new(zoom.view_proj(frame.origin, near), frame.origin, &domain, scene);
+                        let view =
+                            GpuSensorView::new(zoom.view_proj(frame.origin, near), frame.origin, &domain, scene).zoom();
                         batch.views.push(view);
                         batch.views.push(GpuSensorView { layer: alone, ..view }.emitters_only());
                         batch.zooms.push(GpuZoom {

@@ -81,8 +81,34 @@ pub enum MapLayout {
 pub struct CkParams {
     pub epsilon: f32,
     pub background: Background,
-    /// Surfaces return the cache's values (`GpuScene::cache`) as they are now.
-    pub cache: bool,
+    /// What surfaces return of the radiance cache (`GpuScene::cache`).
+    pub cache: CacheRead,
+}
+
+/// What a sensor texel holds of the radiance cache (docs/DESIGN.md §10; `glsl/sensor_shade.glsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CacheRead {
+    /// Nothing: `Kd·ε` only.
+    #[default]
+    Off,
+    /// The reflected light of the cache's value at the point the texel sees, as the values are now.
+    Values,
+    /// Which of the cache's values that is, instead of any light in the main layers (emitter fronts keep
+    /// their group, so the zoom views measure the lights as ever): the transport's rows
+    /// (`gi::transport`, read by `passes::transport`). Only with ε 0 and a black background, whose main
+    /// layers would sum to nothing.
+    Entries,
+}
+
+impl CacheRead {
+    /// `SensorPush::cache`: `glsl/types.glsl`'s `CACHE_*`.
+    fn code(self) -> u32 {
+        match self {
+            Self::Off => 0,
+            Self::Values => 1,
+            Self::Entries => 2,
+        }
+    }
 }
 
 /// What a sensor texel that sees no geometry holds.
@@ -114,12 +140,12 @@ impl Background {
 impl CkParams {
     /// The paper's `Kd·ε` and `background`, no cache.
     pub fn epsilon(epsilon: f32, background: Background) -> Self {
-        Self { epsilon, background, cache: false }
+        Self { epsilon, background, cache: CacheRead::Off }
     }
 
     /// The sensor push of these (the rest for the strategy and pipeline to fill in).
     fn push(&self) -> SensorPush {
-        SensorPush { epsilon: self.epsilon, cache: self.cache as u32, ..Default::default() }
+        SensorPush { epsilon: self.epsilon, cache: self.cache.code(), ..Default::default() }
     }
 }
 
