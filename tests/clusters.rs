@@ -240,3 +240,50 @@ fn the_cache_returns_what_was_built_and_rebuilds_what_it_cannot_trust() {
     assert_ne!(cache::mesh_key(&moved), key);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A fluted column is two surfaces per flute, each a strip that, simplified alone with its border locked,
+/// never went below its 2 × rings triangles. Simplified as one connected part, seams between its surfaces
+/// shorten alike on both sides: every triangle keeps its surface, the coarsest level is a small share of
+/// the full detail, and any selection far away stays watertight (by positions: each surface keeps its own
+/// vertices along the seams).
+#[test]
+fn a_shape_of_many_surfaces_is_simplified_as_one() {
+    let scene = common::hall::hall(16, 8, (32, 24));
+    let mesh = &scene.mesh;
+    let c = clusters::build(mesh);
+    for k in &c.clusters {
+        for t in c.triangles_of(k) {
+            let s = c.vertex_surface[t[0] as usize];
+            assert!(t.iter().all(|&v| c.vertex_surface[v as usize] == s), "a triangle across surfaces in {k:?}");
+        }
+    }
+    let column = |k: &&Cluster| mesh.surfaces[k.surface as usize - 1].name.starts_with("columns/");
+    let full: u32 = c.clusters.iter().filter(column).filter(|k| k.is_full_detail()).map(|k| k.triangles()).sum();
+    let coarsest: u32 =
+        c.clusters.iter().filter(column).filter(|k| k.parent.error == f32::MAX).map(|k| k.triangles()).sum();
+    let surfaces = mesh.surfaces.iter().filter(|s| s.name.starts_with("columns/")).count() as u32;
+    assert_eq!(full, 6 * 2 * 144 * 16);
+    assert!(coarsest * 10 <= full, "the columns' coarsest level has {coarsest} of {full} triangles");
+    assert!(coarsest < 2 * 16 * surfaces, "{coarsest} triangles: no better than each flank alone");
+    // Far away, by positions: every edge of the selected columns has its twin.
+    let eye = Vec3::new(0.0, 3.0, 60.0);
+    let chosen: Vec<Cluster> =
+        c.clusters.iter().filter(column).copied().filter(|k| selected(k, eye, 1e-3, 0.02)).collect();
+    let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+    for k in &chosen {
+        for t in c.triangles_of(k) {
+            for e in 0..3 {
+                let (a, b) = (bits(c.positions[t[e] as usize]), bits(c.positions[t[(e + 1) % 3] as usize]));
+                *edges.entry((a, b)).or_default() += 1;
+            }
+        }
+    }
+    // The shafts are open tubes: only their top and bottom rims may have no twin.
+    let inside = |p: [u32; 3]| {
+        let y = f32::from_bits(p[1]);
+        y > 0.31 && y < 5.29
+    };
+    let open: Vec<_> = edges.keys().filter(|(a, b)| !edges.contains_key(&(*b, *a))).collect();
+    assert!(!open.is_empty(), "the rims are open");
+    assert!(open.iter().all(|(a, b)| !(inside(*a) || inside(*b))), "a crack between two flanks");
+}

@@ -2,6 +2,7 @@
 #![allow(dead_code)] // each test binary uses a different subset
 
 pub mod gltf;
+pub mod hall;
 pub mod meshes;
 
 use std::path::{Path, PathBuf};
