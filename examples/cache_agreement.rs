@@ -28,7 +28,7 @@ fn main() -> Result<()> {
     let indirect = Indirect::Bounces(bounces.map_or(Bounces::Converged, Bounces::Fixed));
     let oracle_indirect = Indirect::Bounces(bounces.map_or(Bounces::Converged, |n| Bounces::Fixed(n - 1)));
     let frame = FrameParams::every_pixel(indirect, Vec3::ZERO);
-    let cache = CacheConfig { resolution: 16, sensor_size: 16 };
+    let cache = CacheConfig::new(16, 16);
     let mut renderer = Renderer::builder(&device, &scene, SensorKind::Hemicube, 32)
         .radiance_cache(Some(cache))
         .build_unchecked(StrategyKind::Layered)?;

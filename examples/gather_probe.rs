@@ -26,10 +26,10 @@ fn main() -> Result<()> {
     let indirect = Indirect::Bounces(Bounces::Converged);
     let frame = FrameParams::every_pixel(indirect, Vec3::ZERO);
     let mut renderer = Renderer::builder(&device, &scene, SensorKind::Hemicube, 32)
-        .radiance_cache(Some(CacheConfig {
-            resolution: std::env::var("RES").ok().and_then(|s| s.parse().ok()).unwrap_or(16),
-            sensor_size: std::env::var("CRD").ok().and_then(|s| s.parse().ok()).unwrap_or(16),
-        }))
+        .radiance_cache(Some(CacheConfig::new(
+            std::env::var("RES").ok().and_then(|s| s.parse().ok()).unwrap_or(16),
+            std::env::var("CRD").ok().and_then(|s| s.parse().ok()).unwrap_or(16),
+        )))
         .build_unchecked(StrategyKind::Layered)?;
     renderer.solve_cache(&frame, &Quiet)?;
     // STEP > 0: every STEP-th pixel of the rows from Y on, summed (a region's bias, not one pixel's).

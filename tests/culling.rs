@@ -154,7 +154,7 @@ fn global_illumination_on_a_culled_mesh_is_within_three_percent_of_the_path_trac
     let out = common::gpu(|device| {
         let mut r = Renderer::builder(device, &scene, SensorKind::Hemicube, RD)
             .detail(Detail::Clusters)
-            .radiance_cache(Some(sensorlight::renderer::CacheConfig { resolution: 16, sensor_size: 16 }))
+            .radiance_cache(Some(sensorlight::renderer::CacheConfig::new(16, 16)))
             .build_unchecked(StrategyKind::Layered)
             .unwrap();
         assert!(r.culled());

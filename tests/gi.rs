@@ -17,7 +17,7 @@ fn render_gi(scene: &Scene, bounces: Bounces, background: Vec3, (rd, resolution)
     let frame = FrameParams::every_pixel(Indirect::Bounces(bounces), background);
     common::gpu(|device| {
         let mut renderer = Renderer::builder(device, scene, SensorKind::Hemicube, rd)
-            .radiance_cache(Some(CacheConfig { resolution, sensor_size: 16 }))
+            .radiance_cache(Some(CacheConfig::new(resolution, 16)))
             .build_unchecked(StrategyKind::default())
             .unwrap();
         renderer.render(scene.image, &frame, &Quiet).unwrap()

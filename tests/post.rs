@@ -125,7 +125,7 @@ fn the_indirect_part_is_filtered_apart() {
         let mut setup = common::every_pixel(SensorKind::Hemicube, 8, 0.0);
         setup.frame.indirect = sensorlight::params::Indirect::Bounces(sensorlight::params::Bounces::Fixed(2));
         setup.frame.indirect_filter_radius = indirect_radius;
-        setup.cache = Some(sensorlight::renderer::CacheConfig { resolution: 8, sensor_size: 8 });
+        setup.cache = Some(sensorlight::renderer::CacheConfig::new(8, 8));
         common::render(&scene, &setup, None)
     };
     let (plain, filtered) = (render(0), render(3));

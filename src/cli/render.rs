@@ -10,7 +10,7 @@ use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Antialiasing, RenderParams};
-use sensorlight::renderer::{RenderOutput, RenderStats};
+use sensorlight::renderer::{LaterBounces, RenderOutput, RenderStats};
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event};
 
@@ -210,13 +210,26 @@ fn print_stats(s: &RenderStats, wall: Duration) {
         let tail = g.ratio.map_or(String::new(), |r| {
             format!(", the rest extrapolated (ratio {r:.3}: {:.1} % of the light)", 100.0 * g.tail_share)
         });
+        let later = match g.later {
+            LaterBounces::Transport { nonzeros, bytes } => format!(
+                "the others as products with what they see of each other ({nonzeros} weights, {:.1} MiB)",
+                bytes as f64 / (1 << 20) as f64
+            ),
+            LaterBounces::Sensed { budget } => format!(
+                "the others sensed at rd {} (what they see of each other would need over {:.0} MiB)",
+                g.sensor_size,
+                budget as f64 / (1 << 20) as f64
+            ),
+        };
         sensorlight::errln!(
-            "global illumination: {} bounce(s) of {} cache sensors (rd {} after the first) in {:.2} s{change}{tail}; \
-             cache {} cells along the longest side ({:.3} each), {} keys, {:.1} KiB",
+            "global illumination: {} bounce(s) in {:.2} s{change}{tail}: the first sensed the {} of {} cache entries \
+             light reaches ({} spread sensors), {later}; cache {} cells along the longest side ({:.3} each), {} \
+             keys, {:.1} KiB",
             g.bounces,
-            g.entries,
-            g.sensor_size,
             g.seconds.0 + g.seconds.1,
+            g.reached,
+            g.entries,
+            g.spread_sensors,
             g.resolution,
             g.cell,
             g.keys,

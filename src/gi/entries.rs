@@ -37,6 +37,9 @@ pub const MAX_SPLITS: u32 = 3;
 /// Other surfaces' triangles examined for splits per piece (in triangle order): a bound for cells where
 /// two detailed meshes meet.
 const MAX_CANDIDATES: usize = 64;
+/// A piece whose area-weighted normal is shorter than this share of its area is curved at the cell's scale
+/// (its normals spread over more than about ±25°): no wall stands on it, it is not split.
+pub const FLAT: f32 = 0.9;
 /// Cells are clipped this much larger (in cells), so that every cell a fragment may round into has a key.
 pub const MARGIN: f32 = 1e-3;
 /// A reference to a piece's entries: the pair index, or with this bit a split node's index.
@@ -155,12 +158,15 @@ fn cells_of(grid: &Grid, v: &[Vec3; 3]) -> impl Iterator<Item = (UVec3, Polygon)
 }
 
 /// Builds the pieces of the mesh's `triangles` on `grid`; `lod`: triangles of coarser levels of detail,
-/// which add aliases only; `light`: where the direct light varies (pieces are halved there).
+/// which add aliases only; `light`: where the direct light varies (pieces are halved there); `corrugated`:
+/// per surface id, whether it is a corrugation of a larger shape (`gi::shape`: its pieces are neither split
+/// nor halved, and its planes split no other piece).
 pub fn build(
     grid: &Grid,
     triangles: &[Triangle],
     lod: &[([Vec3; 3], SurfaceId)],
     light: Option<LightVaries<'_>>,
+    corrugated: &[bool],
 ) -> Pieces {
     let mut clips: Vec<Clip> = triangles
         .par_iter()
@@ -193,8 +199,17 @@ pub fn build(
                 })
                 .collect();
             let surface_normal = polygons.iter().map(|(p, n)| *n * p.area_centroid().0).sum::<Vec3>();
-            let candidates =
-                split_planes(grid, triangles, &runs[cell_runs[i].0..cell_runs[i].1], run[0].surface, surface_normal);
+            let area: f32 = polygons.iter().map(|(p, _)| p.area_centroid().0).sum();
+            // No wall stands on a corrugation's piece (the planes of its neighbouring facets cut it into up
+            // to eight parts for no better light) or on a piece curved at the cell's scale (a sphere's);
+            // both are halved where their light varies (a capital's shadow on a column's top, a sphere's
+            // lit top and dark underside).
+            let cell_runs = &runs[cell_runs[i].0..cell_runs[i].1];
+            let candidates = if surface_normal.length() < FLAT * area || corrugated[run[0].surface as usize] {
+                Vec::new()
+            } else {
+                split_planes(grid, triangles, cell_runs, (run[0].surface, surface_normal), corrugated)
+            };
             split(polygons, &candidates, MAX_SPLITS, MIN_SPLIT_AREA * face, light)
         })
         .collect();
@@ -289,11 +304,19 @@ impl Pieces {
 }
 
 /// Planes of other surfaces' triangles in this cell (`cell`: its runs) that may split `surface`'s piece,
-/// whose area-weighted normal is `normal`: not parallel to it, each once.
-fn split_planes(grid: &Grid, triangles: &[Triangle], cell: &[&[Clip]], surface: SurfaceId, normal: Vec3) -> Vec<Vec4> {
+/// whose area-weighted normal is `normal`: not parallel to it, not of a corrugation, each once.
+fn split_planes(
+    grid: &Grid,
+    triangles: &[Triangle],
+    cell: &[&[Clip]],
+    (surface, normal): (SurfaceId, Vec3),
+    corrugated: &[bool],
+) -> Vec<Vec4> {
     let n = normal.normalize_or_zero();
     let mut planes: Vec<Vec4> = Vec::new();
-    let others = cell.iter().filter(|run| run[0].surface != surface).flat_map(|run| run.iter());
+    let others = (cell.iter())
+        .filter(|run| run[0].surface != surface && !corrugated[run[0].surface as usize])
+        .flat_map(|run| run.iter());
     for clip in others.take(MAX_CANDIDATES) {
         let t = &triangles[clip.triangle as usize];
         if t.normal.dot(n).abs() > 0.999 {
@@ -361,8 +384,8 @@ fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
     Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1), spread: None }
 }
 
-/// A leaf, halved along its two longest axes where `light` says its direct light varies over it, `levels`
-/// times at most.
+/// A leaf, halved along its two longest axes (the second where it is at least half the first) where `light`
+/// says its direct light varies over it, `levels` times at most.
 fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, levels: u32, min: f32) -> Tree {
     let mut whole = leaf(&polygons);
     let Some(varies) = light else { return Tree::Leaf(whole) };
@@ -378,9 +401,11 @@ fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, levels: u
     let extent = b.max - b.min;
     let mut axes = [0, 1, 2];
     axes.sort_by(|&a, &c| extent[c].total_cmp(&extent[a]));
+    // The second axis only where it is at least half as long as the first: a strip (a column's flute) is
+    // halved along its length, not across its few centimetres.
     let planes: Vec<Vec4> = axes[..2]
         .iter()
-        .filter(|&&a| extent[a] > 0.0)
+        .filter(|&&a| extent[a] > 0.0 && extent[a] >= 0.5 * extent[axes[0]])
         .map(|&a| {
             let mut plane = Vec4::ZERO;
             plane[a] = 1.0;

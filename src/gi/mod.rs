@@ -16,6 +16,8 @@
 
 pub mod entries;
 pub mod grid;
+pub mod reach;
+pub mod shape;
 pub mod solve;
 pub mod transport;
 
@@ -90,7 +92,8 @@ impl RadianceCache {
         let local = mesh.local_triangles();
         let last_local = local.iter().map(|t| t.surface).max().unwrap_or(0);
         let local_lod: Vec<([Vec3; 3], SurfaceId)> = lod.iter().filter(|(_, s)| *s <= last_local).copied().collect();
-        let pieces = entries::build(&grid, local, &local_lod, light);
+        let corrugated = shape::corrugated(mesh, local, grid.cell);
+        let pieces = entries::build(&grid, local, &local_lod, light, &corrugated);
         let albedo =
             pieces.entries.iter().map(|e| mesh.surface_albedo(e.surface).min(Vec3::splat(MAX_ALBEDO))).collect();
         let keys: Vec<([u32; 2], u32)> =

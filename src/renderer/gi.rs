@@ -15,6 +15,8 @@ use super::batch::{BatchRunner, Sensed, SensedMaps};
 use super::{Phase, Progress};
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
+use crate::gi::entries::SAMPLES_PER_PIECE;
+use crate::gi::reach::Reach;
 use crate::gi::solve::{Next, Solver};
 use crate::gi::transport::{self, Transport};
 use crate::gpu_scene::GpuCache;
@@ -39,8 +41,16 @@ pub struct BounceDone {
 pub struct GiStats {
     /// Bounces sensed.
     pub bounces: u32,
-    /// Cache entries (sensors per bounce), keys in its table, and its bytes on the GPU.
+    /// Cache entries, keys in its table, and its bytes on the GPU.
     pub entries: u64,
+    /// The entries light reaches (`gi::reach`), which alone are sensed, and the levels of the walk that
+    /// found them.
+    pub reached: u64,
+    pub levels: u32,
+    /// Sensors at points spread over the reached pieces whose direct light varies over them.
+    pub spread_sensors: u64,
+    /// The triangles the walk's sensors drew, all their views (where the scene is drawn from its clusters).
+    pub drawn_triangles: Option<u64>,
     /// Pieces halved because their direct light varies over them (`gi::entries::MAX_LIGHT_LEVELS`), and the
     /// entry pairs whose direct light is still measured at points spread over them.
     pub light_splits: u64,
@@ -101,16 +111,43 @@ fn points_as_gbuffer(cache: &RadianceCache, points: &[(Vec3, usize)]) -> GBuffer
     }
 }
 
-/// The first bounce's sensors: every entry's point, then the points spread over each piece whose direct
-/// light varies over it (both sides), whose mean is that entry's direct light.
-fn first_points(cache: &RadianceCache) -> Vec<(Vec3, usize)> {
-    let mut points: Vec<(Vec3, usize)> = cache.entries.iter().enumerate().map(|(i, e)| (e.point, i)).collect();
+/// Every entry's own point, entry i at pixel i: an entry's sensor is the same (turned alike) in every pass.
+fn entry_points(cache: &RadianceCache) -> Vec<(Vec3, usize)> {
+    cache.entries.iter().enumerate().map(|(i, e)| (e.point, i)).collect()
+}
+
+/// The points spread over each piece whose direct light varies over it, on the sides `reach` reached: the
+/// mean of the direct light there is that entry's. Eight consecutive points per entry.
+fn spread_points(cache: &RadianceCache, reach: &Reach) -> Vec<(Vec3, usize)> {
+    let mut points = Vec::new();
     for (pair, spread) in &cache.spread {
-        for entry in [2 * *pair as usize, 2 * *pair as usize + 1] {
+        for entry in [2 * *pair as usize, 2 * *pair as usize + 1].into_iter().filter(|&e| reach.is_reached(e)) {
             points.extend(spread.iter().map(|&p| (p, entry)));
         }
     }
     points
+}
+
+/// The direct light at a point `p` of normal `n` as shadow rays to points on the lights weigh each light
+/// group's unoccluded irradiance in closed form (`sensors::hints`): what the spread points take.
+pub(super) type DirectByRays<'a> = &'a (dyn Fn(Vec3, Vec3) -> Vec3 + Sync);
+
+/// An uneven piece's direct light as the mean over the points spread over it: its sensor's R, moved by how
+/// much the shadow rays' estimate of the mean differs from theirs at the sensor's own point (a control
+/// variate: where the rays see what the sensor saw, the sensor's measure is kept). Eight sensors a side
+/// cost more than all the other entries on a lamp-lit room; 8 × 64 rays do not.
+fn spread_by_rays(cache: &RadianceCache, spread: &[(Vec3, usize)], rays: DirectByRays<'_>, r: &mut [Vec3]) {
+    let moves: Vec<(usize, Vec3)> = spread
+        .par_chunks(SAMPLES_PER_PIECE)
+        .map(|points| {
+            let entry = &cache.entries[points[0].1];
+            let mean = points.iter().map(|&(p, _)| rays(p, entry.normal)).sum::<Vec3>() / points.len() as f32;
+            (points[0].1, mean - rays(entry.point, entry.normal))
+        })
+        .collect();
+    for (i, m) in moves {
+        r[i] = (r[i] + m).max(Vec3::ZERO);
+    }
 }
 
 /// The runners the bounces sense with: the render's own for the first (direct light, through the exact
@@ -121,17 +158,26 @@ pub(super) struct Runners<'a> {
     pub later: &'a mut BatchRunner,
 }
 
-/// R at every point of `g` from one sensing pass of `runner` with `ck`; with [`CacheRead::Entries`], `rows`
-/// receives each batch's pixels and texel lists.
+/// R at `pixels` of `g` (every point where `None`) from one sensing pass of `runner` with `ck`, per pixel of
+/// `g` (zero where not sensed); with [`CacheRead::Entries`], `rows` receives each batch's pixels and texel
+/// lists.
 fn sense(
     runner: &mut BatchRunner,
-    g: &GBufferData,
+    (g, pixels): (&GBufferData, Option<&[u32]>),
     ck: CkParams,
     progress: &dyn Progress,
     rows: &mut dyn FnMut(&[u32], &[u32]),
 ) -> Result<Vec<Vec3>> {
     let n = g.position.len();
-    let all: Vec<u32> = (0..n as u32).collect();
+    let all: Vec<u32>;
+    let pixels = match pixels {
+        Some(p) => p,
+        None => {
+            all = (0..n as u32).collect();
+            &all
+        }
+    };
+    progress.queued(pixels.len() as u64);
     let mut r = vec![Vec3::ZERO; n];
     let mut deliver = |b: &Sensed<'_>| {
         b.pixels.iter().zip(b.results).for_each(|(&i, f)| r[i as usize] = f.r.truncate());
@@ -140,14 +186,17 @@ fn sense(
         }
         progress.done(b.pixels.len() as u64);
     };
-    runner.sense_or_stop(g, &all, ck, &mut deliver, &|| progress.cancelled())?;
+    runner.sense_or_stop(g, pixels, ck, &mut deliver, &|| progress.cancelled())?;
     runner.drain(&mut deliver)?;
     Ok(r)
 }
 
-/// The transport's rows as the first bounce's sensors deliver them, within a budget of host memory.
+/// The transport's rows as the first bounce's sensors deliver them, within a budget of host memory, and the
+/// values each level's sensors saw (the walk's next level).
 struct Rows {
     rows: Vec<Vec<(u32, f32)>>,
+    /// The values the sensors since the last [`Rows::seen`] saw.
+    seen: Vec<u32>,
     /// Each main-layer texel's projected solid angle over π.
     weights: Vec<f32>,
     bytes: u64,
@@ -160,6 +209,7 @@ impl Rows {
         let weights = weights::sensor_weights(runner.layout().kind, runner.sensor_size());
         Self {
             rows: vec![Vec::new(); entries],
+            seen: Vec::new(),
             weights: weights.iter().map(|w| (w / std::f64::consts::PI) as f32).collect(),
             bytes: 0,
             budget,
@@ -167,26 +217,29 @@ impl Rows {
         }
     }
 
-    /// A batch's sensors (`pixels`) and their texel lists: the entries' rows (the spread points' sensors
-    /// have none).
-    fn take(&mut self, pixels: &[u32], texels: &[u32]) {
-        if self.over {
-            return;
-        }
+    /// A batch's sensors (`entries`: pixel i senses entry i) and their texel lists: those entries' rows.
+    fn take(&mut self, entries: &[u32], texels: &[u32]) {
         let per_sensor = self.weights.len();
-        let (weights, entries) = (&self.weights, self.rows.len());
-        let rows: Vec<(u32, Vec<(u32, f32)>)> = (pixels.par_iter().zip(texels.par_chunks_exact(per_sensor)))
-            .filter(|(i, _)| (**i as usize) < entries)
+        let weights = &self.weights;
+        let rows: Vec<(u32, Vec<(u32, f32)>)> = (entries.par_iter().zip(texels.par_chunks_exact(per_sensor)))
             .map_init(Vec::new, |scratch, (&i, t)| (i, transport::row(t, weights, scratch)))
             .collect();
-        for (i, row) in rows {
-            self.bytes += 8 * row.len() as u64 + 4;
-            self.rows[i as usize] = row;
+        for (entry, row) in rows {
+            self.seen.extend(row.iter().map(|&(c, _)| c));
+            if !self.over {
+                self.bytes += 8 * row.len() as u64 + 4;
+                self.rows[entry as usize] = row;
+            }
         }
-        if self.bytes > self.budget {
+        if !self.over && self.bytes > self.budget {
             self.over = true;
             self.rows = Vec::new();
         }
+    }
+
+    /// The values seen since the last call.
+    fn seen(&mut self) -> impl Iterator<Item = u32> {
+        std::mem::take(&mut self.seen).into_iter()
     }
 }
 
@@ -204,39 +257,69 @@ impl Rows {
 pub(super) fn solve(
     device: &Arc<Device>,
     runners: Runners<'_>,
-    (cache, gpu): (&RadianceCache, &GpuCache),
+    (cache, gpu, seeds): (&RadianceCache, &GpuCache, Vec<u32>),
     (bounces, background, transport_budget): (Bounces, Background, u64),
+    rays: Option<DirectByRays<'_>>,
     progress: &dyn Progress,
 ) -> Result<GiStats> {
     let start = Instant::now();
     progress.phase(Phase::Bounces);
     let n = cache.entries.len();
-    let first = first_points(cache);
-    let (g, first_g) = (points_as_gbuffer(cache, &first[..n]), points_as_gbuffer(cache, &first));
-    // The reductions write R at each sensor's pixel: the first pass has the most.
-    let maps = SensedMaps::new(device, first_g.size)?;
+    // The reductions write R at each sensor's pixel: an entry's is its index, a spread point's its place
+    // among them.
+    let most = n.max(cache.spread.len() * 2 * SAMPLES_PER_PIECE).max(1);
+    let g = points_as_gbuffer(cache, &entry_points(cache));
+    let maps = SensedMaps::new(device, ImageSize { width: most as u32, height: 1 })?;
     runners.first.bind(&maps)?;
     runners.later.bind(&maps)?;
     let mut solver = Solver::new(bounces, crate::gi::solve::DEFAULT_TOLERANCE, n);
-    // The first bounce: the direct light and the transport's rows, and what the entries see of the
-    // background (its own pass).
-    let sky_pass = if background.is_black() { 0 } else { n };
-    progress.queued((first.len() + sky_pass) as u64);
-    let mut rows = Rows::new(n, runners.first, transport_budget);
-    let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Entries };
-    let sensed = sense(runners.first, &first_g, direct, progress, &mut |i, t| rows.take(i, t))?;
-    let mut r = sensed[..n].to_vec();
-    let mut spread = vec![(Vec3::ZERO, 0u32); n];
-    for (&(_, i), s) in first[n..].iter().zip(&sensed[n..]) {
-        spread[i] = (spread[i].0 + *s, spread[i].1 + 1);
+    // The first bounce, level by level of the walk from the seeds: each level's direct light and rows, whose
+    // values not yet reached are the next level. With shadow rays, the direct light is theirs and the rows
+    // come from the cache's own smaller maps, without zoom views; else both from the render's sensors.
+    let runner = if rays.is_some() { &mut *runners.later } else { &mut *runners.first };
+    let mut reach = Reach::new(n);
+    let mut rows = Rows::new(n, runner, transport_budget);
+    let mut r = vec![Vec3::ZERO; n];
+    let mut level = seeds;
+    let mut levels = 0;
+    while !level.is_empty() {
+        reach.mark(&level);
+        levels += 1;
+        let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Entries };
+        let sensed = sense(runner, (&g, Some(&level)), direct, progress, &mut |p, t| rows.take(p, t))?;
+        match rays {
+            Some(rays) => {
+                let at = |&i: &u32| rays(cache.entries[i as usize].point, cache.entries[i as usize].normal);
+                let direct: Vec<Vec3> = level.par_iter().map(at).collect();
+                level.iter().zip(direct).for_each(|(&i, d)| r[i as usize] = d);
+            }
+            None => level.iter().for_each(|&i| r[i as usize] = sensed[i as usize]),
+        }
+        level = reach.next(rows.seen());
     }
-    r.iter_mut().zip(spread).filter(|(_, (_, count))| *count > 0).for_each(|(r, (sum, count))| *r = sum / count as f32);
+    let drawn_triangles = runner.times.drawn_triangles;
+    // Pieces whose direct light varies over them: the mean of the points spread over them.
+    let spread = spread_points(cache, &reach);
+    let spread_sensors = if rays.is_some() { 0 } else { spread.len() };
+    if let Some(rays) = rays {
+        spread_by_rays(cache, &spread, rays, &mut r);
+    } else if !spread.is_empty() {
+        let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Off };
+        let spread_g = points_as_gbuffer(cache, &spread);
+        let sensed = sense(runners.first, (&spread_g, None), direct, progress, &mut |_, _| ())?;
+        let mut sums = vec![(Vec3::ZERO, 0u32); n];
+        for (&(_, i), s) in spread.iter().zip(&sensed) {
+            sums[i] = (sums[i].0 + *s, sums[i].1 + 1);
+        }
+        r.iter_mut().zip(sums).filter(|(_, (_, k))| *k > 0).for_each(|(r, (sum, k))| *r = sum / k as f32);
+    }
+    let reached = reach.reached();
     let transport = (!rows.over).then(|| Transport::from_rows(&rows.rows));
     drop(rows);
     let first_seconds = start.elapsed().as_secs_f64();
     if !background.is_black() {
         let ck = CkParams { epsilon: 0.0, background, cache: CacheRead::Off };
-        let sky = sense(runners.later, &g, ck, progress, &mut |_, _| ())?;
+        let sky = sense(runners.later, (&g, Some(&reached)), ck, progress, &mut |_, _| ())?;
         r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
     }
     // What the last bounce added, as the values buffer holds it (its surface sides' means after it).
@@ -247,9 +330,8 @@ pub(super) fn solve(
             let added = match &transport {
                 Some(t) => t.apply(&added_values),
                 None => {
-                    progress.queued(n as u64);
                     let ck = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Values };
-                    sense(runners.later, &g, ck, progress, &mut |_, _| ())?
+                    sense(runners.later, (&g, Some(&reached)), ck, progress, &mut |_, _| ())?
                 }
             };
             r.iter_mut().zip(added).for_each(|(r, a)| *r += a);
@@ -262,7 +344,11 @@ pub(super) fn solve(
             transfer::write_buffer(device, &gpu.values, &values).context("update the radiance cache")?;
         }
         added_values = values.iter().map(|v| v.truncate()).collect();
-        let sensors = if transport.is_some() && bounce > 1 { 0 } else { n as u64 };
+        let sensors = match (bounce, &transport) {
+            (1, _) => (reached.len() + spread_sensors) as u64,
+            (_, Some(_)) => 0,
+            (_, None) => reached.len() as u64,
+        };
         progress.bounce(&BounceDone { bounce, sensors, change: solver.last_change });
         if next == Next::Done {
             break;
@@ -275,6 +361,10 @@ pub(super) fn solve(
     Ok(GiStats {
         bounces: solver.bounces(),
         entries: n as u64,
+        reached: reached.len() as u64,
+        levels,
+        spread_sensors: spread_sensors as u64,
+        drawn_triangles,
         light_splits: cache.light_splits as u64,
         spread_pairs: cache.spread.len() as u64,
         keys: cache.keys as u64,

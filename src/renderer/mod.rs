@@ -181,16 +181,26 @@ pub struct RendererConfig {
 pub struct CacheConfig {
     /// Cells along the scene's longest side (`params::RenderParams::cache_resolution`).
     pub resolution: u32,
-    /// rd of the sensors of its bounces after the first, which measure only the light the cache reflects
-    /// (the first measures the direct light at the renderer's own rd).
+    /// rd of the sensors that measure what the entries see of the sky, and of the bounces after the first
+    /// where the transport's rows would exceed `transport_budget` (the first measures the direct light and
+    /// the rows at the renderer's own rd).
     pub sensor_size: u32,
+    /// Host bytes the transport's rows may take (`gi::transport`), beyond which the bounces after the
+    /// first are sensed again.
+    pub transport_budget: u64,
 }
 
 impl CacheConfig {
+    /// A cache of `resolution` cells along the scene's longest side, sensors of `sensor_size` where its
+    /// bounces are sensed, and the default budget for the transport's rows.
+    pub fn new(resolution: u32, sensor_size: u32) -> Self {
+        Self { resolution, sensor_size, transport_budget: crate::gi::transport::DEFAULT_BUDGET }
+    }
+
     /// The cache `params` ask for: with global illumination, of their resolution and sensor size.
     pub fn for_params(params: &RenderParams) -> Option<Self> {
         let (resolution, sensor_size) = (params.cache_resolution, params.cache_sensor_size);
-        params.estimator.indirect.bounces().map(|_| Self { resolution, sensor_size })
+        params.estimator.indirect.bounces().map(|_| Self::new(resolution, sensor_size))
     }
 }
 
@@ -449,8 +459,12 @@ pub struct Renderer {
     resolve: ResolvePass,
     gbuffer: GBufferPass,
     scene: GpuScene,
-    /// The radiance cache's points and table, and the runner of its later bounces (with `config.cache`).
+    /// The radiance cache's points and table, and the runner of its rows and later bounces (with
+    /// `config.cache`).
     cache: Option<(RadianceCache, BatchRunner)>,
+    /// Whether the cache's direct light is measured by shadow rays (`gi::DirectByRays`): light groups of at
+    /// most one emitter chunk; else by the render's sensors.
+    direct_by_rays: bool,
     camera: Camera,
     /// The scene's diagonal: sensor offsets and near planes are fractions of it.
     scale: f32,
@@ -543,6 +557,9 @@ impl Renderer {
             points.extend(hints::sky_points(sky, &scene.mesh.bounds, points.len()));
         }
         let shadow_points = (layout.groups > 0).then(|| ShadowPoints::new(&lights));
+        // The cache's direct light by shadow rays and the closed form, where the closed form is cheap (as for
+        // the exact interpolation).
+        let direct_by_rays = layout.groups > 0 && lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
         if let Some(c) = config.cache {
             check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;
         }
@@ -581,7 +598,8 @@ impl Renderer {
                 let quarter = (budget / 4).min(all * TEXEL_BYTES);
                 budget -= quarter;
                 let desc = StrategyDesc { layout, fronts: EmitterFronts::Group, rd: c.sensor_size, budget: quarter };
-                Some((points, BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?))
+                let runner = BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?;
+                Some((points, runner.with_rows()?))
             }
             _ => None,
         };
@@ -593,8 +611,9 @@ impl Renderer {
             shadow_points,
             runner: {
                 let runner = BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?;
-                // The radiance cache's first bounce reads the transport's rows from its maps.
-                if cache.is_some() { runner.with_rows()? } else { runner }
+                // The radiance cache's first bounce reads the transport's rows from the render's maps where
+                // no shadow rays give its direct light (`gi::solve`).
+                if cache.is_some() && !direct_by_rays { runner.with_rows()? } else { runner }
             },
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
@@ -603,6 +622,7 @@ impl Renderer {
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
             scene: gpu_scene,
             cache,
+            direct_by_rays,
             camera: scene.camera,
             scale,
             config,
@@ -678,9 +698,33 @@ impl Renderer {
             "this renderer was built without a radiance cache (RendererBuilder::radiance_cache): it renders the \
              paper's ε only",
         )?;
+        // Only the entries light reaches are sensed: the walk starts at the emitters' entries, and where
+        // rays that leave the scene carry light, at the entries that see out.
+        let distant_lights = self.host.mesh.local_triangles().len() < self.host.mesh.triangles.len();
+        let sky = !background.is_black() || distant_lights;
+        let bias = frame::BIAS * self.scale;
+        let seeds = crate::gi::reach::seeds(cache, &self.host.mesh, &self.bvh, sky, bias);
         let runners = gi::Runners { first: &mut self.runner, later };
-        let light = (bounces, background, crate::gi::transport::DEFAULT_BUDGET);
-        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache), light, progress)?;
+        let budget = self.config.cache.map_or(crate::gi::transport::DEFAULT_BUDGET, |c| c.transport_budget);
+        let light = (bounces, background, budget);
+        // Where the light hints have points on the lights, an uneven piece's direct light is measured by
+        // shadow rays from the points spread over it rather than by sensors there.
+        let (lights, bvh, near) = (&self.scene.lights, &self.bvh, frame::NEAR * self.scale);
+        let bits = hints::group_bits(lights);
+        let bits = &bits;
+        let direct = |points: &[LightPoint], p: Vec3, n: Vec3| -> Vec3 {
+            let (facing, seen) = hints::masks(bvh, points, (p, n), bias, near);
+            let e = lights.unoccluded(p + n * bias, n);
+            let share = |g: u64| match (facing & g).count_ones() {
+                0 => 1.0,
+                f => (seen & g).count_ones() as f32 / f as f32,
+            };
+            bits.iter().zip(e).map(|(&g, e)| e * share(g)).sum::<Vec3>() / std::f32::consts::PI
+        };
+        let points = self.light_points.as_deref().filter(|_| self.direct_by_rays);
+        let rays = points.map(|points| move |p: Vec3, n: Vec3| direct(points, p, n));
+        let rays = rays.as_ref().map(|f| f as gi::DirectByRays<'_>);
+        let stats = gi::solve(&self.device, runners, (cache, &self.scene.cache, seeds), light, rays, progress)?;
         self.cache_solved = true;
         Ok(Some(stats))
     }

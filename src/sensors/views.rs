@@ -59,8 +59,14 @@ impl BatchViews {
                 let (scene, alone) = (layout.zoom_layer(g as u32, false), layout.zoom_layer(g as u32, true));
                 match Zoom::towards(frame.origin, frame.n, bounds, frame.b, 2.0 / rd as f32) {
                     Some(zoom) => {
+                        // Nothing farther along the view than the group's farthest corner can hide it: a
+                        // plane there (where a slot is free) leaves it out, the ceiling behind a lamp and all.
+                        let mut planes = domain.clone();
+                        if planes.len() < 4 {
+                            planes.push(zoom.far_plane(frame.origin, bounds, near));
+                        }
                         let view =
-                            GpuSensorView::new(zoom.view_proj(frame.origin, near), frame.origin, &domain, scene).zoom();
+                            GpuSensorView::new(zoom.view_proj(frame.origin, near), frame.origin, &planes, scene).zoom();
                         batch.views.push(view);
                         batch.views.push(GpuSensorView { layer: alone, ..view }.emitters_only());
                         batch.zooms.push(GpuZoom {
@@ -105,6 +111,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+    use crate::gpu_types::{VIEW_EMITTERS_ONLY, VIEW_ZOOM};
 
     #[test]
     fn each_sensor_has_its_main_views_then_a_zoom_pair_per_group() {
@@ -121,7 +128,13 @@ mod tests {
         assert_eq!(layers, [0, 1, 1, 2, 2, 3, 4, 5, 6], "main layers, then (scene, emitters) per group");
         assert_eq!(layers, layout.view_layers(), "the layout says the same");
         let flags: Vec<u32> = batch.of(0).iter().map(|v| v.flags).collect();
-        assert_eq!(flags[5..7], [0, 1], "the second of a pair draws the emitters alone");
+        assert_eq!(flags[..5], [0; 5], "main views");
+        assert_eq!(flags[5..7], [VIEW_ZOOM, VIEW_ZOOM | VIEW_EMITTERS_ONLY], "a pair, the second the emitters alone");
+        // A zoom view keeps its group and what lies before it, not what lies beyond (its second clip plane).
+        let (far, frame) = (batch.of(0)[5].clip[1], &frames[0]);
+        let keeps = |p: Vec3| far.truncate().dot(p) + far.w >= 0.0;
+        let beyond = frame.origin + (lamps[0].center() - frame.origin) * 1.5;
+        assert!(keeps(lamps[0].min) && keeps(lamps[0].max) && keeps(frame.origin) && !keeps(beyond));
         assert!(batch.zooms[0].forward.w == 1.0 && batch.zooms[1].forward.w == 0.0, "a group below is not seen");
         assert_eq!(batch.of(0)[7].clip[0], -Vec4::W, "its views draw nothing");
         // A frustum sensor's zoom views are clipped to its four sides; its domain's half-width is recorded.

@@ -32,6 +32,25 @@ pub struct Zoom {
 }
 
 impl Zoom {
+    /// The plane `(m, d)` (keeping `m·p + d ≥ 0`) beyond which, along this view's forward axis from
+    /// `origin`, nothing can stand between `origin` and a point of `bounds`: past its farthest corner, with
+    /// `margin` (world units) to spare.
+    pub fn far_plane(&self, origin: Vec3, bounds: &Aabb, margin: f32) -> Vec4 {
+        let far = (0..8)
+            .map(|i| {
+                let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+                let corner = Vec3::new(
+                    pick(1, bounds.min.x, bounds.max.x),
+                    pick(2, bounds.min.y, bounds.max.y),
+                    pick(4, bounds.min.z, bounds.max.z),
+                );
+                self.forward.dot(corner - origin)
+            })
+            .fold(f32::MIN, f32::max);
+        let far = far + margin + 1e-4 * far.abs();
+        (-self.forward).extend(self.forward.dot(origin) + far)
+    }
+
     /// The narrowest view from `origin` that holds every corner of `bounds`, widened by `margin` (relative,
     /// e.g. a texel's worth: `2 / rd`), its right axis along the major axis of the corners' projection (its
     /// up axis, where that projection is round, as close to `up_hint` as can be). `None` where the box lies
