@@ -6,6 +6,10 @@
 //! On a terminal: a bar on standard error. Elsewhere (a log): a plain line every tenth of the pixels
 //! resolved or every [`LINE_EVERY`], whichever comes first. Nothing with `-q`.
 //!
+//! Before the rounds, the radiance cache: the share of its entries sensed (its walk reaches at most all of
+//! them), and once a second of it is timed, at most how long the rest takes; then its bounces. Rates are
+//! the phase's sensors over the phase's own time.
+//!
 //! Once the first round's size and a cost per sensor are known (the strategy probe's measurement, else the
 //! first sensors'), a run expected to take longer than [`ESTIMATE_ABOVE`] says so.
 
@@ -64,12 +68,15 @@ struct State {
     pixels: u64,
     resolved: u64,
     round: u32,
-    /// The radiance cache's bounce being sensed (global illumination), before the rounds.
+    /// The radiance cache (global illumination), before the rounds: its walk's level, and its last bounce.
+    cache_level: Option<sensorlight::renderer::CacheLevel>,
     bounce: u32,
     round_queued: u64,
     round_done: u64,
     sensors_done: u64,
-    sensing_start: Option<Instant>,
+    /// When the phase began, and the sensors done in it: its rate.
+    phase_start: Option<Instant>,
+    phase_done: u64,
     last_line: Option<Instant>,
     /// Tenths of the pixels resolved already reported by a plain line.
     tenths_said: u64,
@@ -159,15 +166,29 @@ impl Shared {
     /// last line is [`LINE_EVERY`] old.
     fn update(&self, force: bool) {
         let mut s = self.lock();
-        let rate = s.sensing_start.map(|t| s.sensors_done as f64 / t.elapsed().as_secs_f64().max(1e-3));
+        // Over the phase's own time, once there is a second of it to measure.
+        let elapsed = s.phase_start.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let rate = (elapsed >= 1.0 && s.phase_done > 0).then(|| s.phase_done as f64 / elapsed);
         let mut what = s.phase.to_owned();
         if s.round > 0 && s.phase == "sensing" {
             what = format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued);
         }
-        if s.bounce > 0 && s.phase == BOUNCES {
-            what = format!("radiance cache, bounce {}: {}/{} sensors", s.bounce, s.round_done, s.round_queued);
+        if let (Some(level), BOUNCES) = (s.cache_level, s.phase) {
+            let sensed = level.reached - level.sensors + s.round_done.min(level.sensors);
+            let share = 100.0 * sensed as f64 / level.entries.max(1) as f64;
+            what = if s.bounce > 0 {
+                format!("radiance cache: bounce {}", s.bounce + 1)
+            } else {
+                format!(
+                    "radiance cache: {share:.0} % of its entries at most ({sensed} sensed, of {}; level {})",
+                    level.entries, level.level
+                )
+            };
+            if let Some(rate) = rate.filter(|_| s.bounce == 0) {
+                what += &format!(", at most {} left", duration((level.entries - sensed) as f64 / rate));
+            }
         }
-        if let Some(rate) = rate.filter(|_| s.sensors_done > 0) {
+        if let Some(rate) = rate {
             what += &format!(", {rate:.0} sensors/s");
         }
         if let Some(bar) = &self.bar {
@@ -243,9 +264,7 @@ impl Progress for RenderProgress {
                 Phase::Sensing => "sensing",
                 Phase::Post => "interpolation, filter, composition",
             };
-            if phase == Phase::Sensing {
-                s.sensing_start = Some(Instant::now());
-            }
+            (s.phase_start, s.phase_done) = (Some(Instant::now()), 0);
         }
         self.shared.update(false);
     }
@@ -254,9 +273,7 @@ impl Progress for RenderProgress {
         {
             let mut s = self.shared.lock();
             (s.round_queued, s.round_done) = (n, 0);
-            if s.phase == BOUNCES {
-                s.bounce += 1;
-            } else {
+            if s.phase != BOUNCES {
                 s.round += 1;
                 s.first_grid.get_or_insert(n);
             }
@@ -272,6 +289,7 @@ impl Progress for RenderProgress {
             let mut s = self.shared.lock();
             s.round_done += n;
             s.sensors_done += n;
+            s.phase_done += n;
             let done = s.sensors_done;
             s.first_batch.get_or_insert((Instant::now(), done));
         }
@@ -290,10 +308,20 @@ impl Progress for RenderProgress {
         self.shared.update(false);
     }
 
+    fn cache_level(&self, level: &sensorlight::renderer::CacheLevel) {
+        self.shared.lock().cache_level = Some(*level);
+        self.shared.update(false);
+    }
+
     fn bounce(&self, bounce: &BounceDone) {
+        self.shared.lock().bounce = bounce.bounce;
+        self.shared.update(false);
         if say::verbose() {
             let change = bounce.change.map_or(String::new(), |c| format!(", the cache moved {:.2} %", 100.0 * c));
-            self.say(&format!("bounce {}: {} cache sensors{change}", bounce.bounce, bounce.sensors));
+            match bounce.sensors {
+                0 => self.say(&format!("bounce {}: products with the transport's rows{change}", bounce.bounce)),
+                n => self.say(&format!("bounce {}: {n} cache sensors{change}", bounce.bounce)),
+            }
         }
     }
 

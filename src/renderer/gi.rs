@@ -36,6 +36,18 @@ pub struct BounceDone {
     pub change: Option<f64>,
 }
 
+/// A level of the radiance cache's walk begins (`gi::reach`): for progress displays, which know then
+/// how much of the cache, at most, is still to sense.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CacheLevel {
+    /// 1-based.
+    pub level: u32,
+    /// The level's sensors, the entries reached with them, and all the cache's (what the walk may reach).
+    pub sensors: u64,
+    pub reached: u64,
+    pub entries: u64,
+}
+
 /// What the bounces did, for the statistics.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct GiStats {
@@ -285,6 +297,8 @@ pub(super) fn solve(
     while !level.is_empty() {
         reach.mark(&level);
         levels += 1;
+        let (sensors, reached) = (level.len() as u64, reach.count() as u64);
+        progress.cache_level(&CacheLevel { level: levels, sensors, reached, entries: n as u64 });
         let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Entries };
         let sensed = sense(runner, (&g, Some(&level)), direct, progress, &mut |p, t| rows.take(p, t))?;
         match rays {

@@ -24,7 +24,7 @@ use gpu_allocator::MemoryLocation;
 
 pub use batch::BatchTimes;
 use batch::{BatchRunner, Sensed, SensedMaps};
-pub use gi::{BounceDone, GiStats, LaterBounces};
+pub use gi::{BounceDone, CacheLevel, GiStats, LaterBounces};
 pub use probe::probe_pixels;
 pub use stats::{RenderStats, RenderTimes};
 
@@ -98,8 +98,10 @@ pub trait Progress {
     fn done(&self, _n: u64) {}
     /// A round's results were judged.
     fn round(&self, _round: &RoundDone) {}
-    /// A bounce of the radiance cache is done (its sensors were [`Progress::queued`] and [`Progress::done`]
-    /// in [`Phase::Bounces`]).
+    /// The radiance cache's walk (`gi::reach`) begins a level: its sensors are [`Progress::queued`] next.
+    fn cache_level(&self, _level: &CacheLevel) {}
+    /// A bounce of the radiance cache is done (its sensors, if any, were [`Progress::queued`] and
+    /// [`Progress::done`] in [`Phase::Bounces`]).
     fn bounce(&self, _bounce: &BounceDone) {}
     /// Whether [`Progress::snapshot`] should see round `round` (1-based): building one costs a pass over the
     /// image on the host.
