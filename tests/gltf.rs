@@ -99,6 +99,20 @@ fn a_position_naming_no_accessor_is_an_error_not_a_panic() {
     assert!(!out.exists());
 }
 
+/// An accessor whose count runs past its buffer view (here 2³¹ positions) is a malformed file, refused naming
+/// the accessor: the glTF reader answered no positions for it, and the mesh was skipped with a warning.
+#[test]
+fn an_accessor_past_its_buffer_view_is_refused_naming_it() {
+    let dir = common::scratch("gltf-accessor-count");
+    let path = common::gltf::write_gltf_edited(&dir, "scene", |doc| doc["accessors"][0]["count"] = (1u64 << 31).into());
+    let out = dir.join("out.exr");
+    let message =
+        common::expect_failure(&["render", path.to_str().unwrap(), "-o", out.to_str().unwrap()], "scene.gltf");
+    assert!(message.contains("malformed: accessor 0 (Positions: 2147483648 elements"), "{message}");
+    assert!(message.contains("buffer view"), "{message}");
+    assert!(!out.exists());
+}
+
 /// `KHR_lights_punctual`: a point light becomes a small emitting sphere whose irradiance on the floor is
 /// the light's, `I·cosθ/d²`, within 3 % (the lights' closed form on its facets); a spot light lights all
 /// around (said); the directional light is the sun, along its node's +z, its intensity the irradiance.

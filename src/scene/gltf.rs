@@ -101,6 +101,31 @@ mod quiet_panics {
     }
 }
 
+/// That `accessor` (`what` for the message) lies within its buffer view and the view within its buffer:
+/// `offset + stride · (count − 1) + element size` bytes at most.
+fn check_accessor(accessor: &gltf::Accessor<'_>, what: &str, buffers: &[gltf::buffer::Data]) -> Result<()> {
+    let Some(view) = accessor.view() else { return Ok(()) }; // all zeros (or sparse): nothing to overrun
+    let (count, size) = (accessor.count() as u64, accessor.size() as u64);
+    let stride = view.stride().map_or(size, |s| s as u64);
+    let needs = accessor.offset() as u64 + stride.saturating_mul(count.saturating_sub(1)) + size;
+    let index = accessor.index();
+    ensure!(
+        count == 0 || needs <= view.length() as u64,
+        "malformed: accessor {index} ({what}: {count} elements of {size} bytes, {stride} apart) needs {needs} bytes of \
+         buffer view {}, which has {}",
+        view.index(),
+        view.length()
+    );
+    let buffer = buffers.get(view.buffer().index()).map_or(0, |b| b.0.len() as u64);
+    ensure!(
+        (view.offset() + view.length()) as u64 <= buffer,
+        "malformed: buffer view {} (of accessor {index}, {what}) ends at byte {}, past its buffer's {buffer}",
+        view.index(),
+        view.offset() + view.length()
+    );
+    Ok(())
+}
+
 fn read(path: &Path) -> Result<GltfData> {
     let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let invalid = || format!("{}: not a valid glTF 2.0 file", path.display());
@@ -380,6 +405,14 @@ impl Reader<'_> {
                 && material.pbr_metallic_roughness().base_color_factor()[3] < material.alpha_cutoff().unwrap_or(0.5)
             {
                 continue; // cut out entirely
+            }
+            // The reader answers `None` for an accessor past its buffer view, which reads as a missing
+            // attribute: a malformed file is said as such first.
+            for (semantic, accessor) in primitive.attributes() {
+                check_accessor(&accessor, &format!("{semantic:?}"), self.buffers).with_context(where_)?;
+            }
+            if let Some(accessor) = primitive.indices() {
+                check_accessor(&accessor, "indices", self.buffers).with_context(where_)?;
             }
             let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(positions) = reader.read_positions() else {
