@@ -219,6 +219,24 @@ fn missing_and_corrupt_textures_are_said() {
     assert!(error.contains("checker.png") && error.contains("not a readable image"), "{error}");
 }
 
+/// A texture is refused for what the README promises, not for the decoder's own defaults: a 12 000² RGBA
+/// PNG (576 MB decoded, over the image crate's 512 MiB default) is read; one over 16 384 texels a side is
+/// refused with its size and the limit, before its texels are decoded.
+#[test]
+fn textures_up_to_the_largest_side_are_read_and_larger_ones_named() {
+    let dir = common::scratch("textures-large");
+    let (side, path) = (12_000u32, dir.join("large.png"));
+    image::RgbaImage::from_fn(side, side, |x, y| image::Rgba([(x / 1000) as u8 * 20, (y / 1000) as u8 * 20, 9, 255]))
+        .save(&path)
+        .unwrap();
+    let texture = sensorlight::scene::Texture::load(&path).unwrap();
+    assert_eq!((texture.width(), texture.height()), (side, side));
+    let path = dir.join("wide.png");
+    image::RgbImage::from_pixel(16_385, 1, image::Rgb([1, 2, 3])).save(&path).unwrap();
+    let error = format!("{:#}", sensorlight::scene::Texture::load(&path).unwrap_err());
+    assert!(error.contains("wide.png is 16385 × 1 texels: larger than 16384 on a side"), "{error}");
+}
+
 /// `vt` on only some faces of a textured group: the texture is not applied there, and said.
 #[test]
 fn a_textured_group_without_coordinates_keeps_its_kd() {

@@ -419,10 +419,15 @@ fn check_textures(device: &Device, textures: &[Texture]) -> Result<()> {
     let bytes = texture::gpu_bytes(textures);
     let most = (device.adapter.device_local_bytes / 4).min(device.adapter.limits.max_storage_buffer_range as u64);
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    let largest = textures.iter().max_by_key(|t| t.texel_count());
+    let largest = largest.map_or(String::new(), |t| {
+        let own = texture::gpu_bytes(std::slice::from_ref(t));
+        format!(" (the largest, {}, is {} × {}: {:.0} MiB)", t.name, t.width(), t.height(), mib(own))
+    });
     ensure!(
         bytes <= most,
-        "the scene's {} texture(s) need {:.0} MiB with their mipmaps, more than this device allows ({:.0} MiB: a \
-         quarter of its memory, in one storage buffer); use smaller images",
+        "the scene's {} texture(s) need {:.0} MiB with their mipmaps{largest}, more than this device allows ({:.0} \
+         MiB: a quarter of its memory, in one storage buffer); use smaller images",
         textures.len(),
         mib(bytes),
         mib(most)

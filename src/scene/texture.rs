@@ -61,21 +61,33 @@ impl Texture {
 
     fn decode_as(bytes: &[u8], name: &str, mask: bool) -> Result<Self> {
         let unreadable = || format!("texture {name} is not a readable image");
-        let mut reader =
-            image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().with_context(unreadable)?;
-        // TGA has no signature to guess it by: its name's extension says it.
-        if reader.format().is_none() {
-            reader.set_format(image::ImageFormat::from_path(name).with_context(unreadable)?);
+        let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
+            let mut reader =
+                image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().with_context(unreadable)?;
+            // TGA has no signature to guess it by: its name's extension says it.
+            if reader.format().is_none() {
+                reader.set_format(image::ImageFormat::from_path(name).with_context(unreadable)?);
+            }
+            Ok(reader)
+        };
+        // A header claiming a huge image is refused, with its size, before anything is allocated for it.
+        let (width, height) = reader()?.into_dimensions().with_context(unreadable)?;
+        if width > MAX_SIDE || height > MAX_SIDE {
+            bail!("texture {name} is {width} × {height} texels: larger than {MAX_SIDE} on a side");
         }
-        // A header claiming a huge image is refused before anything is allocated for it.
-        let mut limits = image::Limits::default();
-        (limits.max_image_width, limits.max_image_height) = (Some(MAX_SIDE), Some(MAX_SIDE));
-        reader.limits(limits);
-        let image = reader.decode().with_context(unreadable)?;
-        let (width, height) = (image.width(), image.height());
         if width == 0 || height == 0 {
             bail!("texture {name} is {width} × {height}: it has no texels");
         }
+        // The decoder may allocate what the image needs (at most four f32 channels a texel), not its own
+        // default of 512 MiB, which refused a 12 000² RGBA PNG as "Memory limit exceeded". What the device
+        // holds is checked once every texture is read (`renderer::check_textures`).
+        let mut limits = image::Limits::default();
+        (limits.max_image_width, limits.max_image_height) = (Some(MAX_SIDE), Some(MAX_SIDE));
+        limits.max_alloc = Some(16 * width as u64 * height as u64 + (1 << 20));
+        let mut reader = reader()?;
+        reader.limits(limits);
+        let image = reader.decode().with_context(unreadable)?;
+        let (width, height) = (image.width(), image.height());
         let from_red = mask && !image.color().has_alpha();
         let rgba = image.to_rgba8();
         let texel = |[r, g, b, a]: [u8; 4]| u32::from_le_bytes([r, g, b, if from_red { r } else { a }]);
