@@ -250,13 +250,30 @@ fn a_textured_group_without_coordinates_keeps_its_kd() {
     .unwrap();
     let obj = sensorlight::scene::obj::load(&dir.join("m.obj")).unwrap();
     assert!(
-        obj.warnings.iter().any(|w| w.contains("group 'a'") && w.contains("not all its faces")),
+        obj.warnings.iter().any(|w| w.contains("m.obj:10: group 'a'") && w.contains("1 of its 2 faces here give no")),
         "{:?}",
         obj.warnings
     );
     let group = &obj.groups[0];
     assert!(group.uvs.is_empty() && obj.materials[group.material].kd_map.is_none());
     assert_eq!(obj.textures.len(), 1);
+}
+
+/// A file without `g` or `o` lines is one group: that its light's faces give no `vt` does not take the
+/// floor's texture away, whose faces all give them (coordinates are judged per material, not per group).
+#[test]
+fn a_texture_is_kept_where_its_materials_faces_give_coordinates_in_a_file_without_groups() {
+    let dir = common::scratch("textures-no-groups");
+    write_png(&dir.join("t.png"), 2, 2, |_, _| [255, 0, 0]);
+    std::fs::write(dir.join("m.mtl"), "newmtl t\nKd 0.5 0.5 0.5\nmap_Kd t.png\nnewmtl light\nKe 5 5 5\n").unwrap();
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl t\n\
+               f 1/1 2/2 3/3\nf 1/1 3/3 4/1\nusemtl light\nf 1 2 3\n";
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let obj = sensorlight::scene::obj::load(&dir.join("m.obj")).unwrap();
+    assert!(obj.warnings.iter().all(|w| !w.contains("texture coordinates")), "{:?}", obj.warnings);
+    let floor = obj.groups.iter().find(|g| obj.materials[g.material].name == "t").unwrap();
+    assert_eq!(floor.uvs.len(), 2, "the floor's faces keep their coordinates");
+    assert!(obj.materials[floor.material].kd_map.is_some(), "and its material its texture");
 }
 
 /// The textured room's floor as a glTF quad whose `TEXCOORD_0` map the checker as the OBJ's `vt` do (glTF's

@@ -10,7 +10,7 @@
 //! other words that are no number (`1.2.3`, `abc`, `1e`) are refused with their line.
 
 use std::cell::RefCell;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -215,9 +215,9 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
             ..Material::new(&m.name, m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(unstated)), ke)
         });
     }
-    let defined: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+    let defined: BTreeSet<String> = materials.iter().map(|m| m.name.clone()).collect();
     for (name, line) in &checked.used_materials {
-        if !defined.contains(name.as_str()) {
+        if !defined.contains(name) {
             warnings.push(format!(
                 "{}:{line}: material '{name}' is not defined in any MTL file; using grey Kd {} and no emission",
                 path.display(),
@@ -228,16 +228,26 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
     let default_material = materials.len();
     materials.push(Material::new("(default grey)", Vec3::splat(Material::DEFAULT_KD), Vec3::ZERO));
 
-    for name in checked.with_normals.intersection(&checked.without_normals) {
-        warnings.push(format!(
-            "{}: group '{name}': some faces have normals ('vn') and some do not; shading it flat",
-            path.display()
-        ));
+    for ((group, material), give) in &checked.faces {
+        if give.normals.0 > 0 && give.normals.1 > 0 {
+            warnings.push(format!(
+                "{}: group '{group}', material '{material}': some faces have normals ('vn') and some do not; shading \
+                 them flat",
+                path.display()
+            ));
+        }
     }
 
     let mut groups = Vec::with_capacity(models.len());
     for model in models {
         let m = &model.mesh;
+        // What this model's faces gave, as the checking pass counted them (tobj makes a model per group and
+        // material; a material it cannot find is a model without one, `usemtl` still naming it).
+        let used = m.material_id.map_or_else(
+            || checked.faces.keys().find(|(g, mtl)| *g == model.name && !defined.contains(mtl)),
+            |i| checked.faces.keys().find(|(g, mtl)| *g == model.name && *mtl == tobj_materials[i].name),
+        );
+        let give = used.and_then(|key| checked.faces.get(key)).copied().unwrap_or_default();
         let at = |values: &[f32], i: u32| {
             let i = 3 * i as usize;
             Vec3::new(values[i], values[i + 1], values[i + 2])
@@ -246,31 +256,30 @@ pub fn load(path: &Path) -> Result<ObjData, LoadError> {
         let triangles = m.indices.chunks_exact(3).map(|t| corners(&m.positions, t)).collect();
         // Where a face names no normal, tobj makes one up from the previous corner's: such a group is
         // shaded flat (the checking pass found it).
-        let smooth = m.normal_indices.len() == m.indices.len()
-            && !m.normal_indices.is_empty()
-            && !checked.without_normals.contains(&model.name);
+        let smooth = m.normal_indices.len() == m.indices.len() && !m.normal_indices.is_empty() && give.normals.1 == 0;
         let normals = match smooth {
             true => m.normal_indices.chunks_exact(3).map(|t| corners(&m.normals, t)).collect(),
             false => Vec::new(),
         };
         // The same for texture coordinates; the image's rows run down, OBJ's v up.
         let uv = |i: u32| Vec2::new(m.texcoords[2 * i as usize], 1.0 - m.texcoords[2 * i as usize + 1]);
-        let textured = m.texcoord_indices.len() == m.indices.len()
-            && !m.texcoord_indices.is_empty()
-            && !checked.without_uvs.contains(&model.name);
+        let textured = m.texcoord_indices.len() == m.indices.len() && !m.texcoord_indices.is_empty() && give.uvs.1 == 0;
         let uvs = match textured {
             true => m.texcoord_indices.chunks_exact(3).map(|t| [uv(t[0]), uv(t[1]), uv(t[2])]).collect(),
             false => Vec::new(),
         };
         let mut material = m.material_id.unwrap_or(default_material);
         if uvs.is_empty() && materials[material].is_textured() {
+            let (with, without) = give.uvs;
+            let at = give.first_without_uvs.map_or(String::new(), |line| format!(":{line}"));
             warnings.push(format!(
-                "{}: group '{}': material '{}' has a texture, but {} faces give texture coordinates ('vt'); \
-                 using its Kd and Ke alone, not cut out",
+                "{}{at}: group '{}': material '{}' has a texture, but {} of its {} faces here give no texture \
+                 coordinates ('vt'); using its Kd and Ke alone there, not cut out",
                 path.display(),
                 model.name,
                 materials[material].name,
-                if checked.with_uvs.contains(&model.name) { "not all its" } else { "none of its" }
+                if with == 0 { "all".to_owned() } else { without.to_string() },
+                with + without
             ));
             // The material's copy without its texture, for this group alone.
             materials.push(materials[material].untextured());
@@ -435,21 +444,26 @@ struct CheckedObj {
     text: String,
     /// Material names used by `usemtl`, with the first line using each.
     used_materials: Vec<(String, usize)>,
-    /// Groups (by the name tobj gives them) with a face that names normals, and with one that does not.
-    with_normals: BTreeSet<String>,
-    without_normals: BTreeSet<String>,
-    /// The same for texture coordinates.
-    with_uvs: BTreeSet<String>,
-    without_uvs: BTreeSet<String>,
+    /// Per group (by the name tobj gives it) and material (as `usemtl` names it, empty before any): what
+    /// its faces give. tobj makes a model of each, and invents what a face does not give.
+    faces: BTreeMap<(String, String), FacesGive>,
+}
+
+/// What the faces of one group and material give: how many name normals and how many do not, the same for
+/// texture coordinates, and the first line of a face without them.
+#[derive(Clone, Copy, Debug, Default)]
+struct FacesGive {
+    normals: (usize, usize),
+    uvs: (usize, usize),
+    first_without_uvs: Option<usize>,
 }
 
 fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<CheckedObj, LoadError> {
     let mut out = String::with_capacity(text.len());
     let mut used_materials: Vec<(String, usize)> = Vec::new();
     let mut counts = [0usize; 3]; // v, vt, vn seen so far
-    let mut group = String::from(UNNAMED_GROUP);
-    let (mut with_normals, mut without_normals) = (BTreeSet::new(), BTreeSet::new());
-    let (mut with_uvs, mut without_uvs) = (BTreeSet::new(), BTreeSet::new());
+    let (mut group, mut material) = (String::from(UNNAMED_GROUP), String::new());
+    let mut faces: BTreeMap<(String, String), FacesGive> = BTreeMap::new();
     let mut ignored = BTreeSet::new();
     let mut stray_dots: Vec<(usize, String)> = Vec::new();
     for (index, raw) in text.lines().enumerate() {
@@ -530,8 +544,16 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                 }
                 if keyword == "f" {
                     let names = |slot| args.iter().all(|v| v.split('/').nth(slot).is_some_and(|n| !n.is_empty()));
-                    if names(2) { &mut with_normals } else { &mut without_normals }.insert(group.clone());
-                    if names(1) { &mut with_uvs } else { &mut without_uvs }.insert(group.clone());
+                    let give = faces.entry((group.clone(), material.clone())).or_default();
+                    let count = |(with, without): &mut (usize, usize), named: bool| match named {
+                        true => *with += 1,
+                        false => *without += 1,
+                    };
+                    count(&mut give.normals, names(2));
+                    count(&mut give.uvs, names(1));
+                    if !names(1) {
+                        give.first_without_uvs.get_or_insert(line_no);
+                    }
                 }
                 if keyword != "f" {
                     // Checked, then dropped: lines and points have no area to light.
@@ -548,6 +570,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
                 if !used_materials.iter().any(|(n, _)| n == name) {
                     used_materials.push((name.to_owned(), line_no));
                 }
+                material = name.to_owned();
             }
             "mtllib" => {
                 if args.is_empty() {
@@ -577,7 +600,7 @@ fn check_obj(path: &Path, text: &str, warnings: &mut Vec<String>) -> Result<Chec
             ignored.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    Ok(CheckedObj { text: out, used_materials, with_normals, without_normals, with_uvs, without_uvs })
+    Ok(CheckedObj { text: out, used_materials, faces })
 }
 
 fn parse_numbers<'a>(args: &[&'a str]) -> Result<Vec<f32>, &'a str> {
