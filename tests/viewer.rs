@@ -228,6 +228,31 @@ fn the_window_shows_what_render_writes_before_and_after_a_scripted_orbit() {
     assert!(aovs[0].contains(&1.0), "the EXR has the AOVs, the sensor mask among them");
 }
 
+/// A save writes the picture shown when it is asked: `save a`, then `orbit`, then `save b` wrote the orbited
+/// view twice (the first save waited for a render the orbit had already replaced).
+#[test]
+fn a_save_writes_the_picture_shown_when_it_is_asked() {
+    let dir = common::scratch("viewer-saves");
+    let x = Xvfb::start();
+    let script = dir.join("saves.script");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let text = format!("wait done\nsave {}\norbit 30 10\nwait done\nsave {}\nquit\n", a.display(), b.display());
+    std::fs::write(&script, text).unwrap();
+    let size = SIZE.to_string();
+    let run = common::command()
+        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--script"])
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let expected = render_png(&common::project("scenes/cornell/cornell.toml"), &dir.join("render.exr"));
+    assert_eq!(png_rgb(&a.with_extension("png")), expected, "the first save is the scene's own view");
+    let (differ, _) = difference(&png_rgb(&b.with_extension("png")), &expected);
+    assert!(differ > expected.len() / 4, "the second save is the orbited view ({differ} bytes differ)");
+}
+
 #[test]
 fn a_window_of_another_shape_shows_the_picture_letterboxed() {
     let dir = common::scratch("viewer-resize");

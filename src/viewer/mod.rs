@@ -284,8 +284,13 @@ impl Session<'_> {
             Action::ExposureReset => self.exposure = self.start_exposure,
             Action::Show(show) => self.show = show,
             Action::Save(path) => {
+                // The picture shown when the save is asked: at once where the render is done (a move that
+                // follows in the same batch of actions starts another), else once it is.
                 let fatal = path.is_some();
                 self.saves.push((path, fatal));
+                if self.this.done() {
+                    self.run_saves();
+                }
                 return false;
             }
             Action::Resize(width, height) => self.window.request_size((width, height)),
