@@ -1,11 +1,14 @@
 //! A camera for a bare mesh, so that `render mesh.obj` shows it lit without a scene file. Outside
 //! ([`frame`]): it frames the mesh's bounding box. Inside ([`inside`]): a closed room with its light inside
 //! (Bitterli's *veach ajar*) seen from outside is its roof, black; when the mesh encloses its own centre
-//! (rays from the box's centre hit it in at least [`ENCLOSED`] of [`PROBE_RAYS`] directions) and an emitter
-//! faces that centre, the camera stands at the centre and looks along the longest horizontal axis, towards
-//! the side whose emitters send the centre more light (on a tie, the side with the farther wall), with a
-//! [`INSIDE_VFOV_DEG`] field of view. A closed mesh whose emitters all face away (a lit object, not a room)
-//! keeps the outside view: from inside it nothing lit would be seen.
+//! (rays from the box's centre hit it in at least [`ENCLOSED`] of [`PROBE_RAYS`] directions) and light
+//! reaches it, the camera stands at the centre and looks along the longest horizontal axis, with a
+//! [`INSIDE_VFOV_DEG`] field of view. Light reaches the centre where an emitter faces it (the camera then
+//! looks towards the side whose emitters send it more light; on a tie, the side with the farther wall), or
+//! where what the probes meet is lit, by an emitter's front it sees or through one bounce
+//! ([`BOUNCE_RAYS`] more rays from each): a lamp in the next room, behind the door ajar, facing away (the
+//! camera then looks towards the side that shows more lit surface). A closed mesh whose emitters all face
+//! out (a lit object, not a room) keeps the outside view: from inside it nothing lit would be seen.
 
 use anyhow::Result;
 use glam::Vec3;
@@ -34,6 +37,12 @@ pub const PROBE_RAYS: usize = 256;
 pub const ENCLOSED: f32 = 0.95;
 /// Full vertical field of view of a camera inside: wide enough to show a room's walls, floor and ceiling.
 pub const INSIDE_VFOV_DEG: f32 = 65.0;
+/// Rays from each probe's hit (a Fibonacci hemisphere about its normal) looking for lit surfaces beyond it:
+/// the light's one bounce into a room no emitter faces.
+pub const BOUNCE_RAYS: usize = 64;
+/// Points on the emitters that the probes' shadow rays look for, at most (spread over the emitters by
+/// triangle, each its centroid).
+const EMITTER_POINTS: usize = 256;
 
 /// The automatic camera of `mesh` (see the module documentation): inside when the mesh encloses its lit
 /// centre, else [`frame`]d from outside. The flag says which.
@@ -56,12 +65,27 @@ pub enum Placement {
     Inside,
 }
 
-/// The camera inside `mesh`, if the mesh encloses its bounding box's centre and an emitter faces that centre
+/// The camera inside `mesh`, if the mesh encloses its bounding box's centre and light reaches that centre
 /// (see the module documentation); `None` otherwise.
 pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
     let centre = mesh.bounds.center();
+    let emitters: Vec<&super::Triangle> =
+        mesh.triangles.iter().filter(|t| mesh.material_of(t.surface).ke.max_element() > 0.0).collect();
+    if emitters.is_empty() {
+        return Ok(None); // nothing lit to see from inside: the cheap answer first, before any ray
+    }
+    let bvh = Bvh::of_mesh(mesh);
+    let eps = 1e-5 * mesh.scale();
+    let hit = |from: Vec3, dir: Vec3| bvh.intersect(&Ray::new(from, dir), eps, f32::INFINITY);
+    let probes: Vec<(Vec3, Option<super::bvh::Hit>)> = (0..PROBE_RAYS)
+        .map(|k| fibonacci_direction(k, PROBE_RAYS))
+        .map(|d| (d, hit(centre, d)))
+        .collect();
+    if (probes.iter().filter(|(_, h)| h.is_some()).count() as f32) < ENCLOSED * PROBE_RAYS as f32 {
+        return Ok(None);
+    }
     // Light each emitter sends towards the centre (area × luminance × cosine at the emitter), and where from.
-    let lights: Vec<(Vec3, f32)> = (mesh.triangles.iter())
+    let lights: Vec<(Vec3, f32)> = (emitters.iter())
         .filter_map(|t| {
             let ke = mesh.material_of(t.surface).ke;
             let at = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
@@ -70,23 +94,53 @@ pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
             (power > 0.0).then_some((at, power))
         })
         .collect();
-    if lights.is_empty() {
-        return Ok(None); // nothing lit to see from inside: the cheap answer first, before any ray
-    }
-    let bvh = Bvh::of_mesh(mesh);
-    let eps = 1e-5 * mesh.scale();
-    let distance = |dir: Vec3| bvh.intersect(&Ray::new(centre, dir), eps, f32::INFINITY).map(|h| h.t);
-    let hits = (0..PROBE_RAYS).filter(|&k| distance(fibonacci_direction(k, PROBE_RAYS)).is_some()).count();
-    if (hits as f32) < ENCLOSED * PROBE_RAYS as f32 {
-        return Ok(None);
+    // Else, how lit what each probe meets is: 1 where it sees an emitter's front, else the share of its
+    // bounce rays that meet a surface that does.
+    let lit_along: Vec<(Vec3, f32)> = if lights.is_empty() {
+        let step = emitters.len().div_ceil(EMITTER_POINTS);
+        let points: Vec<(Vec3, Vec3)> =
+            emitters.iter().step_by(step).map(|t| ((t.v[0] + t.v[1] + t.v[2]) / 3.0, t.normal)).collect();
+        let surface = |from: Vec3, dir: Vec3, h: &super::bvh::Hit| {
+            let n = mesh.triangles[h.triangle as usize].normal;
+            (from + dir * h.t, if n.dot(dir) > 0.0 { -n } else { n })
+        };
+        let sees_light = |(p, n): (Vec3, Vec3)| {
+            points.iter().any(|&(q, m)| {
+                let d = q - p;
+                d.dot(n) > 0.0 && m.dot(d) < 0.0 && bvh.intersect(&Ray::new(p + n * eps, d), 0.0, 1.0 - 1e-4).is_none()
+            })
+        };
+        let lit = |(d, h): &(Vec3, Option<super::bvh::Hit>)| -> f32 {
+            let Some(h) = h else { return 0.0 };
+            let (p, n) = surface(centre, *d, h);
+            if sees_light((p, n)) {
+                return 1.0;
+            }
+            let (t, b) = n.any_orthonormal_pair();
+            let beyond = (0..BOUNCE_RAYS).filter(|&k| {
+                let l = fibonacci_direction(k, 2 * BOUNCE_RAYS); // the upper half of the sphere: z > 0
+                let dir = t * l.x + b * l.y + n * l.z;
+                hit(p + n * eps, dir).is_some_and(|h2| sees_light(surface(p + n * eps, dir, &h2)))
+            });
+            beyond.count() as f32 / BOUNCE_RAYS as f32
+        };
+        probes.iter().map(|probe| (probe.0, lit(probe))).collect()
+    } else {
+        Vec::new()
+    };
+    if lights.is_empty() && lit_along.iter().all(|&(_, w)| w == 0.0) {
+        return Ok(None); // enclosed, but no light reaches what the centre sees
     }
     let extent = mesh.bounds.max - mesh.bounds.min;
     let axis = if extent.x > extent.z { Vec3::X } else { Vec3::Z };
     let light_towards = |d: Vec3| -> f32 {
-        lights.iter().map(|&(at, power)| power * (at - centre).normalize_or_zero().dot(d).max(0.0)).sum()
+        match lights.is_empty() {
+            false => lights.iter().map(|&(at, power)| power * (at - centre).normalize_or_zero().dot(d).max(0.0)).sum(),
+            true => lit_along.iter().map(|&(along, w)| w * along.dot(d).max(0.0)).sum(),
+        }
     };
     let (ahead, behind) = (light_towards(-axis), light_towards(axis));
-    let open = |d: Vec3| distance(d).unwrap_or(f32::INFINITY);
+    let open = |d: Vec3| hit(centre, d).map_or(f32::INFINITY, |h| h.t);
     // Within 1 % the lights are a tie (a lamp overhead): then the wider view; −axis where that ties too.
     let forward = if (ahead - behind).abs() > 0.01 * ahead.max(behind) {
         if ahead >= behind { -axis } else { axis }
@@ -239,6 +293,15 @@ mod inside_tests {
             assert!(camera.forward.abs_diff_eq(forward, 1e-6), "{} towards the light at z {light_z}", camera.forward);
             assert!((camera.vfov.to_degrees() - INSIDE_VFOV_DEG).abs() < 1e-3);
         }
+    }
+
+    /// A lamp that faces the back wall, away from the centre (as Bitterli's *veach ajar* lamp, in the next
+    /// room): what the probes meet is lit, so the camera stands inside, looking towards the lit wall.
+    #[test]
+    fn a_room_lit_by_a_lamp_facing_away_gets_a_camera_inside() {
+        let (camera, placement) = for_mesh(&room(-2.9, Vec3::NEG_Z, false), DEFAULT_IMAGE).unwrap();
+        assert_eq!(placement, Placement::Inside);
+        assert!(camera.forward.abs_diff_eq(Vec3::NEG_Z, 1e-6), "{} towards the lit back wall", camera.forward);
     }
 
     #[test]
