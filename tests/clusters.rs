@@ -243,15 +243,15 @@ fn the_cache_returns_what_was_built_and_rebuilds_what_it_cannot_trust() {
 
 /// A fluted column is two surfaces per flute, each a strip that, simplified alone with its border locked,
 /// never went below its 2 × rings triangles. Simplified as one connected part, seams between its surfaces
-/// shorten alike on both sides: every triangle keeps its surface, the coarsest level is a small share of
-/// the full detail, and any selection far away stays watertight (by positions: each surface keeps its own
-/// vertices along the seams).
+/// shorten alike on both sides: the full detail keeps every triangle's surface, the levels a tenth of it
+/// and less (where regular simplification is stuck, sloppy simplification merges flutes), and any
+/// selection far away stays watertight (by positions: each surface keeps its own vertices along seams).
 #[test]
 fn a_shape_of_many_surfaces_is_simplified_as_one() {
     let scene = common::hall::hall(16, 8, (32, 24));
     let mesh = &scene.mesh;
     let c = clusters::build(mesh);
-    for k in &c.clusters {
+    for k in c.clusters.iter().filter(|k| k.is_full_detail()) {
         for t in c.triangles_of(k) {
             let s = c.vertex_surface[t[0] as usize];
             assert!(t.iter().all(|&v| c.vertex_surface[v as usize] == s), "a triangle across surfaces in {k:?}");
@@ -259,8 +259,10 @@ fn a_shape_of_many_surfaces_is_simplified_as_one() {
     }
     let column = |k: &&Cluster| mesh.surfaces[k.surface as usize - 1].name.starts_with("columns/");
     let full: u32 = c.clusters.iter().filter(column).filter(|k| k.is_full_detail()).map(|k| k.triangles()).sum();
+    // The coarsest level: what a view far away selects.
+    let far = Vec3::new(0.0, 3.0, 60.0);
     let coarsest: u32 =
-        c.clusters.iter().filter(column).filter(|k| k.parent.error == f32::MAX).map(|k| k.triangles()).sum();
+        c.clusters.iter().filter(column).filter(|k| selected(k, far, 1e-3, 0.02)).map(|k| k.triangles()).sum();
     let surfaces = mesh.surfaces.iter().filter(|s| s.name.starts_with("columns/")).count() as u32;
     assert_eq!(full, 6 * 2 * 144 * 16);
     assert!(coarsest * 10 <= full, "the columns' coarsest level has {coarsest} of {full} triangles");

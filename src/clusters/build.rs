@@ -1,14 +1,17 @@
 //! Building the hierarchy with meshoptimizer's `clusterlod`: split a piece of the mesh into clusters,
 //! partition them into groups, simplify each group with its border locked, split the result again, and
-//! repeat until a level no longer simplifies. Regular (not sloppy, not permissive) simplification only, so
-//! that a closed surface stays closed at every level.
+//! repeat until a level no longer simplifies. Regular (not permissive) simplification, so that a closed
+//! surface stays closed; sloppy simplification only where regular simplification is stuck (a group of
+//! many small pieces, flutes whose seams cannot shorten further: Sponza's coarsest level was 76 000 of its
+//! 262 000 triangles), which may merge surfaces (a coarse triangle then shows its first vertex's).
 //!
 //! The pieces are the mesh's connected parts (surfaces that share an edge; emitters apart), not its
 //! surfaces: a surface ends at a 30° crease, and a fluted column is two surfaces per flute, each a strip
 //! whose locked border kept it at 130 triangles however far away it was seen (58 000 triangles a sensor in
 //! a hall of columns). Within a part, each surface keeps its own vertices (welded within the surface), so
 //! where two surfaces meet meshoptimizer sees a seam: it may shorten it, moving both sides' vertices
-//! alike, but never opens it, and every triangle keeps the vertices, and so the surface, it had.
+//! alike, but never opens it, and every triangle of a regular level keeps the vertices, and so the surface,
+//! it had. A part as a whole vanishes where it projects under a view's accepted error (`vanish_when_small`).
 
 use glam::Vec3;
 use meshopt::{ClodMesh, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
@@ -19,7 +22,7 @@ use crate::scene::surfaces::{FxBuild, weld};
 use crate::scene::{Aabb, Mesh};
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
-pub const BUILD_VERSION: u32 = 4;
+pub const BUILD_VERSION: u32 = 5;
 /// Triangles per cluster at most (and vertices: meshoptimizer's default for rasterisation).
 pub const MAX_TRIANGLES: usize = 128;
 
@@ -46,8 +49,12 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
         .map(|surfaces| {
             let triangles: Vec<(&[Vec3; 3], u32)> =
                 surfaces.iter().flat_map(|&s| by_surface[s as usize].iter().map(move |&v| (v, s))).collect();
-            let simplify = !mesh.material_of(surfaces[0]).is_emitter() && triangles.len() > MAX_TRIANGLES;
-            part_clusters(&triangles, surfaces[0], simplify)
+            let emitter = mesh.material_of(surfaces[0]).is_emitter();
+            let mut part = part_clusters(&triangles, surfaces[0], !emitter && triangles.len() > MAX_TRIANGLES);
+            if !emitter {
+                part.vanish_when_small();
+            }
+            part
         })
         .collect();
     let mut out = ClusterMesh::default();
@@ -126,7 +133,7 @@ fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, simplify: bool) 
     }
     let config = meshopt::ClodConfig {
         simplify_permissive: false,
-        simplify_fallback_sloppy: false,
+        simplify_fallback_sloppy: true,
         ..clod_default_config(MAX_TRIANGLES)
     };
     let bytes = typed_to_bytes(&part.positions);
@@ -167,6 +174,19 @@ fn terminal() -> ErrorBounds {
 }
 
 impl Part {
+    /// What replaces the part's coarsest clusters, where nothing else does: nothing, at an error of half its
+    /// box's diagonal (a shape shrunk to a point is that far from where it was). A part that projects under
+    /// a view's accepted error as a whole (a vase across the atrium, a leaf, under a texel) is not drawn:
+    /// the many small parts of a real model (Sponza: 41 000 triangles in parts of one cluster) would
+    /// otherwise be drawn at full detail however far away.
+    fn vanish_when_small(&mut self) {
+        let part = Aabb::of(self.positions.iter().map(|&p| Vec3::from(p)));
+        for c in self.clusters.iter_mut().filter(|c| c.parent.error == ErrorBounds::TERMINAL) {
+            let error = (0.5 * part.diagonal()).max(c.own.error);
+            c.parent = ErrorBounds::new(part.union(c.own.aabb()), error);
+        }
+    }
+
     fn push(&mut self, indices: &[u32], depth: u32, own: ErrorBounds, parent: ErrorBounds) {
         let positions = &self.positions;
         let points = indices.iter().map(|&v| Vec3::from(positions[v as usize]));

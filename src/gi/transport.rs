@@ -33,13 +33,22 @@ pub struct Transport {
     weights: Vec<f32>,
 }
 
+/// A sensor's row: (value, weight) pairs, increasing by value.
+pub type Row = Vec<(u32, f32)>;
+
 /// One sensor's row from its texel list: the distinct values it sees, increasing, each with the sum of its
-/// texels' `weights` (already over π). `scratch` is reused between calls. Neighbouring texels mostly see
-/// one entry, so runs are summed before the sort.
-pub fn row(texels: &[u32], weights: &[f32], scratch: &mut Vec<(u32, f32)>) -> Vec<(u32, f32)> {
+/// texels' `weights` (already over π); and the weight of the texels that see no surface (the sky's: a
+/// constant background `b` sends the sensor `b` times it). `scratch` is reused between calls. Neighbouring
+/// texels mostly see one entry, so runs are summed before the sort.
+pub fn row(texels: &[u32], weights: &[f32], scratch: &mut Vec<(u32, f32)>) -> (Row, f32) {
     scratch.clear();
+    let mut sky = 0.0;
     for (&v, &w) in texels.iter().zip(weights) {
-        if v == TRANSPORT_NONE || w <= 0.0 {
+        if w <= 0.0 {
+            continue;
+        }
+        if v == TRANSPORT_NONE {
+            sky += w;
             continue;
         }
         match scratch.last_mut() {
@@ -55,7 +64,7 @@ pub fn row(texels: &[u32], weights: &[f32], scratch: &mut Vec<(u32, f32)>) -> Ve
             _ => out.push((v, w)),
         }
     }
-    out
+    (out, sky)
 }
 
 impl Transport {
@@ -107,11 +116,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_row_sums_the_weights_of_each_value_and_skips_the_sky() {
+    fn a_row_sums_the_weights_of_each_value_and_the_skys_apart() {
         let texels = [3, TRANSPORT_NONE, 1, 3, 1, 7];
         let weights = [0.5, 9.0, 0.25, 0.125, 1.0, 0.0];
         let r = row(&texels, &weights, &mut Vec::new());
-        assert_eq!(r, vec![(1, 1.25), (3, 0.625)]);
+        assert_eq!(r, (vec![(1, 1.25), (3, 0.625)], 9.0));
     }
 
     #[test]

@@ -207,6 +207,8 @@ fn sense(
 /// values each level's sensors saw (the walk's next level).
 struct Rows {
     rows: Vec<Vec<(u32, f32)>>,
+    /// Each entry's weight of texels that see no surface (over π), kept whatever the budget.
+    sky: Vec<f32>,
     /// The values the sensors since the last [`Rows::seen`] saw.
     seen: Vec<u32>,
     /// Each main-layer texel's projected solid angle over π.
@@ -221,6 +223,7 @@ impl Rows {
         let weights = weights::sensor_weights(runner.layout().kind, runner.sensor_size());
         Self {
             rows: vec![Vec::new(); entries],
+            sky: vec![0.0; entries],
             seen: Vec::new(),
             weights: weights.iter().map(|w| (w / std::f64::consts::PI) as f32).collect(),
             bytes: 0,
@@ -233,10 +236,11 @@ impl Rows {
     fn take(&mut self, entries: &[u32], texels: &[u32]) {
         let per_sensor = self.weights.len();
         let weights = &self.weights;
-        let rows: Vec<(u32, Vec<(u32, f32)>)> = (entries.par_iter().zip(texels.par_chunks_exact(per_sensor)))
+        let rows: Vec<(u32, (transport::Row, f32))> = (entries.par_iter().zip(texels.par_chunks_exact(per_sensor)))
             .map_init(Vec::new, |scratch, (&i, t)| (i, transport::row(t, weights, scratch)))
             .collect();
-        for (entry, row) in rows {
+        for (entry, (row, sky)) in rows {
+            self.sky[entry as usize] = sky;
             self.seen.extend(row.iter().map(|&(c, _)| c));
             if !self.over {
                 self.bytes += 8 * row.len() as u64 + 4;
@@ -258,8 +262,9 @@ impl Rows {
 /// Senses the cache's bounces and leaves the result in `gpu.values`; `background`: what rays leaving the
 /// scene see.
 ///
-/// Bounce 1's R at an entry is its direct light (emitters only, the background black: the only pass with
-/// zoom views and the emitter pass) and what it sees of the background. Its maps are drawn with
+/// Bounce 1's R at an entry is its direct light (emitters only, the background black: by shadow rays, or
+/// the only pass with zoom views and the emitter pass) and what it sees of the background (a constant's
+/// from the rows' sky weights, a sky map's by a pass of its own). Its maps are drawn with
 /// [`CacheRead::Entries`], so their main layers, which would hold nothing, say which entry each texel sees:
 /// the transport's rows (`gi::transport`). Bounce k adds what the entries see of the light bounce k − 1 added
 /// to the cache, `Δ_{k−1}`: transport is linear, so `R_k = R_{k−1} + T·Δ_{k−1}`, a sparse product. Where the
@@ -328,14 +333,19 @@ pub(super) fn solve(
         r.iter_mut().zip(sums).filter(|(_, (_, k))| *k > 0).for_each(|(r, (sum, k))| *r = sum / k as f32);
     }
     let reached = reach.reached();
+    // What the entries see of the sky: a constant one is the rows' sky weight times its radiance; a sky
+    // map, which varies with the direction, its own pass.
+    match background {
+        Background::Constant(sky) => r.iter_mut().zip(&rows.sky).for_each(|(r, &w)| *r += sky * w),
+        Background::SkyMap => {
+            let ck = CkParams { epsilon: 0.0, background, cache: CacheRead::Off };
+            let sky = sense(runners.later, (&g, Some(&reached)), ck, progress, &mut |_, _| ())?;
+            r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
+        }
+    }
     let transport = (!rows.over).then(|| Transport::from_rows(&rows.rows));
     drop(rows);
     let first_seconds = start.elapsed().as_secs_f64();
-    if !background.is_black() {
-        let ck = CkParams { epsilon: 0.0, background, cache: CacheRead::Off };
-        let sky = sense(runners.later, (&g, Some(&reached)), ck, progress, &mut |_, _| ())?;
-        r.iter_mut().zip(sky).for_each(|(r, s)| *r += s);
-    }
     // What the last bounce added, as the values buffer holds it (its surface sides' means after it).
     let mut added_values: Vec<Vec3> = Vec::new();
     loop {

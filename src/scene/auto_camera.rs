@@ -77,10 +77,8 @@ pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
     let bvh = Bvh::of_mesh(mesh);
     let eps = 1e-5 * mesh.scale();
     let hit = |from: Vec3, dir: Vec3| bvh.intersect(&Ray::new(from, dir), eps, f32::INFINITY);
-    let probes: Vec<(Vec3, Option<super::bvh::Hit>)> = (0..PROBE_RAYS)
-        .map(|k| fibonacci_direction(k, PROBE_RAYS))
-        .map(|d| (d, hit(centre, d)))
-        .collect();
+    let probes: Vec<(Vec3, Option<super::bvh::Hit>)> =
+        (0..PROBE_RAYS).map(|k| fibonacci_direction(k, PROBE_RAYS)).map(|d| (d, hit(centre, d))).collect();
     if (probes.iter().filter(|(_, h)| h.is_some()).count() as f32) < ENCLOSED * PROBE_RAYS as f32 {
         return Ok(None);
     }

@@ -824,7 +824,7 @@ mod tests {
         assert_eq!(group("smooth").normals, [[Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::Z]]);
         assert!(group("mixed").normals.is_empty(), "flat: one of its two faces gives no normals");
         assert!(group("flat").normals.is_empty());
-        let said: Vec<&String> = data.warnings.iter().filter(|w| w.contains("shading it flat")).collect();
+        let said: Vec<&String> = data.warnings.iter().filter(|w| w.contains("shading them flat")).collect();
         assert!(said.len() == 1 && said[0].contains("'mixed'"), "{:?}", data.warnings);
     }
 
