@@ -243,15 +243,15 @@ fn the_cache_returns_what_was_built_and_rebuilds_what_it_cannot_trust() {
 
 /// A fluted column is two surfaces per flute, each a strip that, simplified alone with its border locked,
 /// never went below its 2 × rings triangles. Simplified as one connected part, seams between its surfaces
-/// shorten alike on both sides: the full detail keeps every triangle's surface, the levels a tenth of it
-/// and less (where regular simplification is stuck, sloppy simplification merges flutes), and any
-/// selection far away stays watertight (by positions: each surface keeps its own vertices along seams).
+/// shorten alike on both sides: every triangle keeps its surface, the coarsest level is a small share of
+/// the full detail, and any selection far away stays watertight (by positions: each surface keeps its own
+/// vertices along the seams).
 #[test]
 fn a_shape_of_many_surfaces_is_simplified_as_one() {
     let scene = common::hall::hall(16, 8, (32, 24));
     let mesh = &scene.mesh;
     let c = clusters::build(mesh);
-    for k in c.clusters.iter().filter(|k| k.is_full_detail()) {
+    for k in &c.clusters {
         for t in c.triangles_of(k) {
             let s = c.vertex_surface[t[0] as usize];
             assert!(t.iter().all(|&v| c.vertex_surface[v as usize] == s), "a triangle across surfaces in {k:?}");
