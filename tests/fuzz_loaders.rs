@@ -119,8 +119,12 @@ impl Files {
                     let lines = text.map_or(usize::MAX, |t| t.lines().count());
                     prop_assert!(line >= 1 && line <= lines, "line {line} of {} lines: {message}", lines);
                 }
+                // An image has no lines: what is wrong with it (unreadable, too large, empty) is said of
+                // the file itself.
                 None => prop_assert!(
-                    e.message.starts_with("cannot read") || e.message.contains("not a readable image"),
+                    e.message.starts_with("cannot read")
+                        || e.message.contains("not a readable image")
+                        || is_image(&e.file),
                     "no line given: {message}"
                 ),
             }
@@ -139,6 +143,11 @@ impl Files {
         }
         Ok(())
     }
+}
+
+/// Whether a file is an image (a texture or a sky map), which has no lines to name.
+fn is_image(path: &std::path::Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| ["png", "jpg", "tga", "exr", "hdr"].contains(&e))
 }
 
 fn loaded_scene_is_sound(scene: &Scene) -> Result<(), TestCaseError> {
@@ -591,4 +600,23 @@ proptest! {
         Files::new(&dir).write("mesh.obj", format!("mtllib m.mtl\nusemtl a\n{QUAD}").as_bytes())
             .write("m.mtl", b"newmtl a\nKe 1 1 1\n").scene(&toml).check()?;
     }
+}
+
+/// A texture whose header claims a side past the limit (a case the mutation found): refused naming the
+/// file and its size, with no line, as an image has none.
+#[test]
+fn texture_header_past_the_limit() {
+    let dir = scratch("texture_limit");
+    let image = image::RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 32) as u8, (y * 32) as u8, 128]));
+    image.save(dir.join("t.tga")).unwrap();
+    let mut bytes = std::fs::read(dir.join("t.tga")).unwrap();
+    bytes[13] = 64; // TGA's width, little-endian at bytes 12..14: 8 + 64 · 256 = 16 392
+    let obj = "mtllib m.mtl\nusemtl a\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+               f 1/1 2/2 3/3 4/4\n";
+    let files = Files::new(&dir).write("t.tga", &bytes).write("mesh.obj", obj.as_bytes());
+    let files =
+        files.write("m.mtl", b"newmtl a\nKe 1 1 1\nmap_Kd t.tga\n").scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}"));
+    let error = Scene::load(&dir.join("scene.toml")).expect_err("a 16 392-texel side is refused");
+    assert!(format!("{error:#}").contains("16392 × 8 texels"), "{error:#}");
+    files.check().unwrap();
 }
