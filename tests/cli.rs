@@ -161,8 +161,11 @@ fn global_illumination_is_the_default_and_says_what_it_did() {
 #[test]
 fn bad_render_parameters_are_clear_errors() {
     let scene = common::project("scenes/cornell/cornell.toml");
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 17] = [
         (&["--width", "0"], "--width"),
+        // Said as negative, not with clap's tip to pass it after `--`.
+        (&["--width", "-5"], "'--width <WIDTH>': -5 is negative; a whole number of 0 or more is expected"),
+        (&["--tile", "-8"], "-8 is negative"),
         (&["--bounces", "-1"], "expected a count of bounces (0, 1, 2, …) or 'auto'"),
         (&["--bounces", "many"], "expected a count of bounces"),
         (&["--bounces", "2", "--epsilon", "0.1"], "--bounces 2 cannot be combined with --epsilon 0.1"),
@@ -187,6 +190,27 @@ fn bad_render_parameters_are_clear_errors() {
     }
 }
 
+/// What a user reads about a tiny image and about the viewer's script (issue 42, item 9): a 1 × 1 render
+/// counts its one sensor as one ("1 sensor", not "1 sensors" nor "0 sensors"), and `view --help` names
+/// every script command, `resize` among them, and every view `show` takes.
+#[test]
+fn a_one_pixel_render_and_the_viewers_help_say_it_right() {
+    let out = common::scratch("render_one_pixel").join("one.exr");
+    let scene = common::project("scenes/cornell/cornell.toml");
+    let args = ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "1", "--height", "1"];
+    let run = common::sensorlight(&args);
+    let stderr = common::stderr(&run);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("): 1 sensor, sensor time"), "{stderr}");
+    let help = String::from_utf8_lossy(&common::sensorlight(&["view", "--help"]).stdout).into_owned();
+    for word in ["resize WIDTH HEIGHT", "show VIEW", "wait done", "save F.exr"] {
+        assert!(help.contains(word), "view --help lacks {word:?}: {help}");
+    }
+    for show in sensorlight::viewer::Show::ALL {
+        assert!(help.contains(show.word()), "view --help lacks the view {:?}: {help}", show.word());
+    }
+}
+
 /// Outputs that cannot be written are refused before the scene is even loaded, not after a long render.
 #[test]
 fn unwritable_outputs_are_refused_before_any_work() {
@@ -196,8 +220,9 @@ fn unwritable_outputs_are_refused_before_any_work() {
     let (exr, missing, dir_s) = (exr.to_str().unwrap(), missing.to_str().unwrap(), dir.to_str().unwrap());
     // The scene does not exist either: the output is checked first.
     let png = format!("{dir_s}/x.png");
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["-o", missing], "does not exist"),
+        (&["-o", "-"], "-o -: standard output is not supported"),
         (&["-o", dir_s], "expected an .exr file name"),
         (&["-o", &format!("{dir_s}/x.tif")], "or a .png one (the PNG alone)"),
         (&["-o", &png, "--aovs"], "--aovs writes its layers into the EXR"),
@@ -401,7 +426,7 @@ fn a_file_of_the_wrong_kind_is_named() {
         let input = input.to_str().unwrap();
         let stderr = common::expect_failure(
             &["render", input, "-o", out],
-            "is a PNG image; expected a scene file (TOML) or an OBJ mesh",
+            "is a PNG image; expected a scene file (TOML), or an OBJ or glTF mesh",
         );
         assert!(stderr.contains(input), "{stderr}");
     }

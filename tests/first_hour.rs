@@ -68,6 +68,55 @@ fn a_signal_stops_a_render_and_leaves_no_file() {
     }
 }
 
+/// `reference` and `metrics` stopped by SIGINT once their progress shows (a line on a log, as stderr is
+/// here: `reference`'s rows, `metrics`' first render): each says "interrupted" once, exits 130, and writes
+/// nothing (issue 42, item 10: both ended without a word, and `reference` showed no progress on a log).
+#[test]
+fn reference_and_metrics_show_progress_and_stop_on_a_signal() {
+    use std::io::BufRead as _;
+    let dir = common::scratch("signal-reference-metrics");
+    let exr = dir.join("reference.exr");
+    let metrics = dir.join("metrics");
+    let runs: [(&[&str], &str); 2] = [
+        (
+            &["reference", "scenes/room/room.toml", "-o", exr.to_str().unwrap(), "--width", "64", "--height", "64"],
+            " rows (",
+        ),
+        (&["metrics", "--quick", "-o", metrics.to_str().unwrap()], "ms/sensor"),
+    ];
+    for (args, progress) in runs {
+        let mut child = common::command().args(args).stderr(std::process::Stdio::piped()).spawn().unwrap();
+        let lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let (send, receive) = std::sync::mpsc::channel();
+        let reader = std::thread::spawn(move || {
+            for line in lines.map_while(Result::ok) {
+                let _ = send.send(line);
+            }
+        });
+        let mut said = Vec::new();
+        while let Ok(line) = receive.recv_timeout(Duration::from_secs(180)) {
+            let shown = line.contains(progress);
+            said.push(line);
+            if shown {
+                break;
+            }
+        }
+        assert!(said.last().is_some_and(|l| l.contains(progress)), "{args:?}: no progress line: {said:#?}");
+        let sent = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+        assert!(sent.unwrap().success(), "kill failed");
+        let status = child.wait().unwrap();
+        reader.join().unwrap();
+        said.extend(receive.try_iter());
+        let stderr = said.join("\n");
+        assert_eq!(status.code(), Some(130), "{args:?}: {stderr}");
+        assert_eq!(stderr.matches("interrupted").count(), 1, "{args:?}: said once: {stderr}");
+        for unwanted in ["validation", "panicked", "error", "wrote "] {
+            assert!(!stderr.contains(unwanted), "{args:?}: {unwanted:?} in {stderr}");
+        }
+    }
+    assert_eq!(listing(&dir), Vec::<String>::new(), "nothing written");
+}
+
 /// A number followed by a stray `.` (McGuire's `CornellBox-Sphere.obj`, line 5753: `v  0.2300 1.9900
 /// -0.2200.`) no longer refuses the whole file: the mesh renders and the warning names the file and line.
 /// Garbage is still refused with its line.

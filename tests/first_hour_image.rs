@@ -159,6 +159,39 @@ fn a_dim_mesh_is_exposed_automatically_and_the_flag_wins() {
     assert!(written.contains(&format!("exposure = {stops:.1}")), "{written}");
 }
 
+/// A scene file that sets no exposure, lit so brightly that most of its PNG would clip white at the default
+/// (issue 42, item 8: veach's door ajar, 67 % of its pixels white, without a word): the PNG takes the
+/// automatic exposure, and the summary says why; a scene file that sets `exposure` keeps it, clipped as
+/// asked.
+#[test]
+fn a_scene_file_that_would_clip_is_exposed_automatically_and_says_so() {
+    let dir = common::scratch("first_hour_clipping");
+    std::fs::write(dir.join("tent.obj"), "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv 0 1 0\nf 1 4 3 2\nf 1 2 5\n")
+        .unwrap();
+    let camera = "[camera]\neye = [0, 1.5, 4]\ntarget = [0, 0.3, 0]\nvfov_deg = 40\n[image]\nwidth = 16\nheight = 16\n";
+    let scene = |name: &str, render: &str| {
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!("mesh = \"tent.obj\"\n{camera}[render]\nbackground = [20, 20, 20]\nbounces = 0\n{render}"),
+        )
+        .unwrap();
+        path
+    };
+    let (bright, set) = (scene("bright.toml", ""), scene("set.toml", "exposure = 0\n"));
+    let (auto, fixed) = (dir.join("auto.exr"), dir.join("fixed.exr"));
+    let stderr = render(&bright, &auto, &[]);
+    let said = stderr.lines().find(|l| l.starts_with("exposure ")).unwrap_or_else(|| panic!("{stderr}"));
+    assert!(said.contains("(auto: at the default 0, 100 % of lit pixels would clip white; 99th percentile"), "{said}");
+    let stops: f32 = said["exposure ".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(stops < -3.0, "a sky of 20 is darkened by more than 3 stops: {said}");
+    let stderr = render(&set, &fixed, &[]);
+    assert!(!stderr.contains("(auto:"), "{stderr}");
+    let (exposed, clipped) = (png_mean(&auto.with_extension("png")), png_mean(&fixed.with_extension("png")));
+    // The sky (20) stays white either way; the tent does not.
+    assert!(clipped > 254.0 && exposed < 245.0, "auto {exposed} vs the scene file's exposure 0: {clipped}");
+}
+
 /// `--aovs` writes what Open Image Denoise takes beside the beauty pass, right on the Cornell box: each
 /// pixel's albedo is its material's Kd (the red wall's among them), normals are unit and face the camera,
 /// depth is the distance along the pixel's ray to what it sees (against a CPU ray cast through the BVH).

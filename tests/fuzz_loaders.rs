@@ -617,6 +617,9 @@ fn texture_header_past_the_limit() {
     let files =
         files.write("m.mtl", b"newmtl a\nKe 1 1 1\nmap_Kd t.tga\n").scene(&format!("mesh = \"mesh.obj\"\n{CAMERA}"));
     let error = Scene::load(&dir.join("scene.toml")).expect_err("a 16 392-texel side is refused");
-    assert!(format!("{error:#}").contains("16392 × 8 texels"), "{error:#}");
+    let message = format!("{error:#}");
+    assert!(message.contains("16392 × 8 texels"), "{message}");
+    // The path once (issue 42, item 9: it was printed twice).
+    assert_eq!(message.matches(&dir.join("t.tga").display().to_string()).count(), 1, "{message}");
     files.check().unwrap();
 }

@@ -173,3 +173,41 @@ fn a_scene_file_without_a_camera_takes_the_gltfs() {
     let e = format!("{:#}", Scene::load(&dir.join("obj.toml")).err().unwrap());
     assert!(e.contains("obj.toml") && e.contains("no [camera]") && e.contains("scene.obj"), "{e}");
 }
+
+/// Messages in glTF's words, about what is used (issue 42, item 9): the default material (white) is said
+/// to have a base colour of 1, not `Kd`; a used material's metalness is named as not used, an unused
+/// material's is not; a position that is not a number is said as such, not as a mesh too large for floats;
+/// a `.glb` with a wrong magic is called an invalid glTF file, not a binary file.
+#[test]
+fn gltf_messages_use_its_words_and_speak_of_what_is_used() {
+    let dir = common::scratch("gltf-messages");
+    let path = common::gltf::write_gltf_edited(&dir, "words", |doc| {
+        doc["meshes"][2]["primitives"][0].as_object_mut().unwrap().remove("material");
+        doc["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 1.0.into();
+        let chrome = serde_json::json!({ "name": "chrome", "pbrMetallicRoughness": { "metallicFactor": 1.0 } });
+        doc["materials"].as_array_mut().unwrap().push(chrome);
+    });
+    let scene = Scene::from_mesh(&path, SIZE).unwrap();
+    let grey = scene.warnings.iter().filter(|w| w.contains("material 'grey': metalness (treated as diffuse)"));
+    assert_eq!(grey.count(), 1, "{:?}", scene.warnings);
+    assert!(!scene.warnings.iter().any(|w| w.contains("chrome")), "{:?}", scene.warnings);
+    let albedo = sensorlight::gi::albedo_warnings(&scene.mesh);
+    assert!(albedo.iter().any(|w| w.contains("material '(glTF default, white)' has base colour 1 1 1")), "{albedo:?}");
+    assert!(!albedo.iter().any(|w| w.contains("Kd")), "{albedo:?}");
+
+    let nan = common::gltf::write_gltf(&dir, "nan");
+    let mut bin = std::fs::read(dir.join("nan.bin")).unwrap();
+    bin[0..4].copy_from_slice(&f32::NAN.to_le_bytes()); // the first quad corner's x
+    std::fs::write(dir.join("nan.bin"), bin).unwrap();
+    let error = format!("{:#}", Scene::from_mesh(&nan, SIZE).unwrap_err());
+    assert!(error.contains("with a corner that is not a finite number"), "{error}");
+    assert!(!error.contains("too large"), "{error}");
+
+    let glb = common::gltf::write_glb(&dir, "magic", &[]);
+    let mut bytes = std::fs::read(&glb).unwrap();
+    bytes[0..4].copy_from_slice(b"gLtF");
+    std::fs::write(&glb, bytes).unwrap();
+    let out = dir.join("out.exr");
+    let stderr = common::expect_failure(&["render", glb.to_str().unwrap(), "-o", out.to_str().unwrap()], "magic.glb");
+    assert!(stderr.contains("not a valid glTF 2.0 file") && !stderr.contains("binary file"), "{stderr}");
+}

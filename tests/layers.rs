@@ -23,7 +23,7 @@ const RULES: &[(&str, &[&str])] = &[
     ("gi", &["scene", "gpu_types", "params"]),
     // The oracle: CPU only, never a GPU pass.
     ("supersample", &["scene", "gbuffer", "sensors", "gpu_types", "light"]),
-    ("reference", &["scene", "gbuffer", "sensors", "params", "light"]),
+    ("reference", &["scene", "gbuffer", "sensors", "params", "light", "cancel"]),
     // Strategy choice: asks a prober to measure; knows no pass and no renderer.
     ("strategy", &["sensors", "params", "vk", "output", "shaders"]),
     // The GPU side.

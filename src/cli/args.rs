@@ -64,7 +64,7 @@ impl BounceFlags {
 /// Adaptive refinement and filtering (paper §III-G, §III-H): shared by `render` and `metrics`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct RefinementFlags {
-    #[arg(long, help = format!("dt: initial sensor grid step, a power of two [default: {DEFAULT_TILE}]"))]
+    #[arg(long, value_parser = whole, allow_negative_numbers = true, help = format!("dt: initial sensor grid step, a power of two [default: {DEFAULT_TILE}]"))]
     pub tile: Option<u32>,
     #[arg(
         long,
@@ -75,7 +75,7 @@ pub struct RefinementFlags {
         )
     )]
     pub dradiance: Option<f32>,
-    #[arg(
+    #[arg(value_parser = whole, allow_negative_numbers = true,
         long,
         help = format!(
             "Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: {DEFAULT_FILTER_RADIUS}]"
@@ -178,21 +178,21 @@ pub struct LookFlags {
     pub lights: LightFlags,
     #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
     pub estimator_kind: Option<EstimatorKind>,
-    #[arg(long, help = sensor_size_help())]
+    #[arg(long, value_parser = whole, allow_negative_numbers = true, help = sensor_size_help())]
     pub sensor_size: Option<u32>,
     #[command(flatten)]
     pub refinement: RefinementFlags,
-    #[arg(long, help = format!(
+    #[arg(long, value_parser = whole, allow_negative_numbers = true, help = format!(
         "Global illumination: the radiance cache's cells along the scene's longest side, 1 to \
          {MAX_CACHE_RESOLUTION} (sensors per bounce grow with its square) [default: {DEFAULT_CACHE_RESOLUTION}]"
     ))]
     pub cache_resolution: Option<u32>,
-    #[arg(long, help = format!(
+    #[arg(long, value_parser = whole, allow_negative_numbers = true, help = format!(
         "Global illumination: the id-constrained filter's radius for the indirect light alone, in pixels \
          (0 = off; the direct light keeps its own, --filter-radius) [default: {DEFAULT_INDIRECT_FILTER_RADIUS}]"
     ))]
     pub indirect_filter_radius: Option<u32>,
-    #[arg(long, help = format!(
+    #[arg(long, value_parser = whole, allow_negative_numbers = true, help = format!(
         "Global illumination: rd of the radiance cache's sensors after its first bounce (even for hemicubes) \
          [default: {DEFAULT_CACHE_SENSOR_SIZE}]"
     ))]
@@ -239,18 +239,19 @@ pub struct EngineFlags {
 #[derive(Args, Clone, Debug, Default)]
 pub struct ImageFlags {
     /// Image width in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, value_parser = whole, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, value_parser = whole, allow_negative_numbers = true)]
     pub height: Option<u32>,
     #[arg(
         long,
         allow_negative_numbers = true,
         help = format!(
             "Exposure of the PNG preview, in stops. Tone mapping is linear: radiance × 2^exposure, clipped to 1, \
-             sRGB-encoded (the EXR is never scaled) [default: the scene file's, else {DEFAULT_EXPOSURE}; a bare \
-             mesh: automatic, its lit pixels' 99th percentile of luminance to white]"
+             sRGB-encoded (the EXR is never scaled) [default: the scene file's, else {DEFAULT_EXPOSURE} unless more \
+             than 1 % of lit pixels would clip; a bare mesh: automatic, its lit pixels' 99th percentile of \
+             luminance to white]"
         )
     )]
     pub exposure: Option<f32>,
@@ -317,5 +318,15 @@ fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
         Ok(v) if v.len() == 3 => Ok([v[0], v[1], v[2]]),
         Ok(v) if v.len() == 1 => Ok([v[0]; 3]),
         _ => Err(format!("expected R,G,B (or one value for grey), got '{s}'")),
+    }
+}
+
+/// A whole number for a count or size flag: a negative one is said as such, not as clap's tip to pass it
+/// after `--`.
+fn whole(text: &str) -> Result<u32, String> {
+    match text.trim().parse::<i64>() {
+        Ok(n) if n < 0 => Err(format!("{n} is negative; a whole number of 0 or more is expected")),
+        Ok(n) => u32::try_from(n).map_err(|_| format!("{n} is too large (at most {})", u32::MAX)),
+        Err(_) => Err(format!("'{text}' is not a whole number")),
     }
 }

@@ -89,14 +89,14 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         repeat: args.repeat,
     };
     super::with_device(args.device, |device| {
-        let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
+        let bar = super::counter::Counter::new((config.sizes.len() * config.repeat) as u64, "rounds");
         let report = bench::run(device, &config, &mut |event| match event {
             BenchEvent::Round { .. } => bar.inc(1),
             BenchEvent::Checked { strategy, result } if super::say::verbose() => bar
                 .suspend(|| sensorlight::errln!("self-check {strategy}: max difference {:.2e}", result.max_difference)),
             BenchEvent::Checked { .. } => {}
         })?;
-        bar.finish_and_clear();
+        bar.finish();
         // The files first: a reader of the table that stops early (`| head`) does not lose them.
         let mut files = atomic::Outputs::new();
         if let Some(path) = &args.json {
@@ -142,13 +142,13 @@ fn run_meshes(args: &BenchArgs) -> Result<ExitCode> {
         max_full_detail: args.full_detail_max,
     };
     super::with_device(args.device, |device| {
-        let bar = super::progress_bar((config.sizes.len() * config.repeat) as u64, "rounds");
+        let bar = super::counter::Counter::new((config.sizes.len() * config.repeat) as u64, "rounds");
         let report = bench::run_meshes(device, &config, &mut |event| {
             if let BenchEvent::Round { .. } = event {
                 bar.inc(1)
             }
         })?;
-        bar.finish_and_clear();
+        bar.finish();
         if let Some(path) = &args.json {
             let mut files = atomic::Outputs::new();
             files.stage_bytes(path, &serde_json::to_vec_pretty(&report)?)?;

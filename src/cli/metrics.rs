@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
+use sensorlight::cancel::{Cancel, Reason};
 use sensorlight::metrics::{self, MetricsConfig, report};
 use sensorlight::params::{EstimatorKind, Overrides, RenderParams, SensorShape};
-use sensorlight::renderer::Quiet;
+use sensorlight::renderer::Progress;
 use sensorlight::scene::ImageSize;
 use sensorlight::strategy::{Cache, StrategyRequest};
 
@@ -86,7 +87,17 @@ fn default_scene() -> Result<PathBuf> {
     Ok(path)
 }
 
+/// The renders' progress as the counter of renders shows it; they stop, between batches, once interrupted.
+struct Interruptible(Cancel);
+
+impl Progress for Interruptible {
+    fn cancelled(&self) -> Option<Reason> {
+        self.0.reason()
+    }
+}
+
 pub fn run(args: MetricsArgs) -> Result<ExitCode> {
+    let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     let scene_path = match &args.scene {
         Some(path) => path.clone(),
         None => default_scene()?,
@@ -137,11 +148,11 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
 
     super::with_device(args.device, |device| {
         let runs = config.runs();
-        let overall = super::progress_bar(runs.len() as u64, "renders");
+        let overall = super::counter::Counter::new(runs.len() as u64, "renders");
         let start = Instant::now();
         let mut cache = Cache::open_default();
         // The bar counts renders; sensors within a render are not shown.
-        let results = metrics::run(device, &scene, &config, &mut cache, &Quiet, &mut |run| {
+        let results = metrics::run(device, &scene, &config, &mut cache, &Interruptible(cancel), &mut |run| {
             let s = &run.stats;
             overall.suspend(|| {
                 say!(
@@ -158,7 +169,7 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
             });
             overall.inc(1);
         })?;
-        overall.finish_and_clear();
+        overall.finish();
         let header = report::Header {
             device: &device.adapter.name,
             driver: &device.adapter.driver,

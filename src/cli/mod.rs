@@ -12,6 +12,7 @@ macro_rules! say {
 mod args;
 mod bench;
 mod compare;
+mod counter;
 mod devices;
 mod metrics;
 mod progress;
@@ -27,7 +28,6 @@ use std::sync::Arc;
 use anyhow::{Context as _, Result, bail, ensure};
 use args::LightFlags;
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 use sensorlight::gbuffer::GBufferData;
 use sensorlight::output::exr::ExrImage;
 use sensorlight::params::{Overrides, ParamError, RenderParams};
@@ -174,7 +174,9 @@ fn load_input(
             }
             resolve(scene, flags)
         }
-        kind => bail!("{} is {}; expected a scene file (TOML) or an OBJ mesh", path.display(), kind.describe()),
+        kind => {
+            bail!("{} is {}; expected a scene file (TOML), or an OBJ or glTF mesh", path.display(), kind.describe())
+        }
     }?;
     if let Some(sky) = scene.sky.as_ref().filter(|_| params.estimator.background != glam::Vec3::ZERO) {
         bail!(
@@ -205,6 +207,11 @@ enum OutputKind {
 
 impl OutputKind {
     fn of(path: &Path) -> Result<Self> {
+        ensure!(
+            path != Path::new("-"),
+            "-o -: standard output is not supported (the files are staged and renamed into place whole); name an \
+             .exr or a .png file"
+        );
         let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
         match extension.as_deref() {
             Some("exr") => Ok(OutputKind::Exr),
@@ -352,37 +359,39 @@ fn gbuffer_aovs(exr: ExrImage, g: &GBufferData, eye: glam::Vec3) -> ExrImage {
         .scalar("depth.Z", depth.collect())
 }
 
-/// The PNG's exposure in stops, and whether it was chosen automatically: `--exposure` or a scene file's
-/// `exposure` where set; for a bare mesh (`input` an OBJ), else, the exposure that maps the 99th percentile of
-/// its lit pixels' luminance to white (`png::auto_exposure`; lit: a surface, not an emitter's front, above 0),
-/// so that a dim mesh's PNG is not black; a scene file without one keeps the default.
-fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, bool) {
+/// Above this share of lit pixels brighter than white at a scene file's default exposure, the PNG takes the
+/// automatic exposure instead: the image would be mostly clipped (a bright lamp, an exposure never set).
+const CLIPPED_AT_MOST: f64 = 0.01;
+
+/// The PNG's exposure in stops, and, when it was chosen automatically, what the summary says of it.
+/// `--exposure` or a scene file's `exposure` where set. Else, for a bare mesh (`input` an OBJ or glTF), the
+/// exposure that maps the 99th percentile of its lit pixels' luminance to white (`png::auto_exposure`; lit:
+/// a surface, not an emitter's front, above 0), so that a dim mesh's PNG is not black; for a scene file the
+/// default, unless more than [`CLIPPED_AT_MOST`] of its lit pixels would clip, then the automatic one.
+fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, Option<String>) {
+    use sensorlight::output::png;
     use sensorlight::params::{Origin, Param};
-    if !FileKind::of(input).is_mesh() || params.origin(Param::Exposure) != Origin::Default {
-        return (params.exposure, false);
+    if params.origin(Param::Exposure) != Origin::Default {
+        return (params.exposure, None);
     }
-    let lit = (image.iter().zip(&g.surface).zip(&g.emission))
+    let lit: Vec<f32> = (image.iter().zip(&g.surface).zip(&g.emission))
         .filter(|((_, id), le)| **id != sensorlight::scene::NO_SURFACE && le.truncate() == glam::Vec3::ZERO)
-        .map(|((p, _), _)| sensorlight::output::png::luminance(*p));
-    match sensorlight::output::png::auto_exposure(lit) {
-        Some(stops) => (stops, true),
-        None => (params.exposure, false),
+        .map(|((p, _), _)| png::luminance(*p))
+        .filter(|&y| y > 0.0 && y.is_finite())
+        .collect();
+    let clipped = lit.iter().filter(|&&y| y * params.exposure.exp2() > 1.0).count() as f64 / lit.len().max(1) as f64;
+    let why = if FileKind::of(input).is_mesh() {
+        String::new()
+    } else if clipped > CLIPPED_AT_MOST {
+        format!("at the default {}, {:.0} % of lit pixels would clip white; ", params.exposure, 100.0 * clipped)
+    } else {
+        return (params.exposure, None);
+    };
+    match png::auto_exposure(lit) {
+        Some(stops) => {
+            let sets = if why.is_empty() { "--exposure" } else { "the scene file's `exposure` or --exposure" };
+            (stops, Some(format!("exposure {stops:.1} (auto: {why}99th percentile of lit pixels; {sets} sets it)")))
+        }
+        None => (params.exposure, None),
     }
-}
-
-/// What the summary says of an exposure [`png_exposure`] chose.
-fn auto_exposure_text(stops: f32) -> String {
-    format!("exposure {stops:.1} (auto: 99th percentile of lit pixels; --exposure sets it)")
-}
-
-/// A progress bar on stderr (hidden when stderr is not a terminal, and with `-q`).
-fn progress_bar(total: u64, unit: &str) -> ProgressBar {
-    if !say::normal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(total);
-    let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{eta}} left)");
-    let style = ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style.progress_chars("=> "));
-    bar
 }

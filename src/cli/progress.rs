@@ -246,7 +246,7 @@ impl Shared {
 }
 
 /// `42 s`, `3 min 20 s`.
-fn duration(seconds: f64) -> String {
+pub(super) fn duration(seconds: f64) -> String {
     if seconds < 60.0 {
         format!("{seconds:.0} s")
     } else {

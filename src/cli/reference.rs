@@ -4,8 +4,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use clap::Args;
+use sensorlight::cancel::Cancel;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::Overrides;
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
@@ -42,6 +43,7 @@ pub struct ReferenceArgs {
 }
 
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
+    let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
     outputs.check(&[], &[&args.scene])?;
     let flags = args.bounces.overrides(Overrides {
@@ -83,11 +85,12 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         args.samples / REPLICATES,
         args.seed
     );
-    let bar = super::progress_bar(size.height as u64, "rows");
+    let bar = super::counter::Counter::new(size.height as u64, "rows");
     let start = Instant::now();
-    let result = integrator.render(size, resolved.aa, &|rows| bar.inc(rows));
+    let result = integrator.render_until(size, resolved.aa, &|rows| bar.inc(rows), &cancel);
+    bar.finish();
+    let result = result?;
     let seconds = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
     if let Some(at) = result.image.iter().position(|v| !v.is_finite()) {
         anyhow::bail!(
             "pixel ({}, {}) of the reference is not finite ({}): the light (Ke, --background) summed over \
@@ -116,8 +119,8 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     }
     if let Some(path) = &outputs.png {
         let (exposure, auto) = super::png_exposure(&resolved, &args.scene, &result.image, &result.gbuffer);
-        if auto {
-            say!("{}", super::auto_exposure_text(exposure));
+        if let Some(text) = auto {
+            say!("{text}");
         }
         png::stage(&mut files, path, (size.width, size.height), &result.image, exposure)?;
     }

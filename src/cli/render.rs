@@ -183,14 +183,17 @@ fn print_stats(s: &RenderStats, wall: Duration) {
     if !say::normal() {
         return;
     }
+    // No sensor at all where no pixel shows a surface: no time per sensor to give.
+    let sensors = match s.sensors {
+        0 => "no sensors (no pixel shows a surface)".to_owned(),
+        1 => format!("1 sensor, sensor time {:.4} ms", s.sensor_time_ms),
+        n => format!("{n} sensors, sensor time {:.4} ms", s.sensor_time_ms),
+    };
     sensorlight::errln!(
-        "rendered in {:.2} s (strategy choice and setup {:.2} s + render {:.2} s): {} sensors, sensor time {:.4} ms; \
-         strategy {}, {}",
+        "rendered in {:.2} s (strategy choice and setup {:.2} s + render {:.2} s): {sensors}; strategy {}, {}",
         wall.as_secs_f64(),
         s.build_seconds,
         s.total_seconds,
-        s.sensors,
-        s.sensor_time_ms,
         s.strategy,
         s.device
     );
@@ -298,8 +301,8 @@ fn write_outputs(
     cancel: &Cancel,
 ) -> Result<()> {
     let (exposure, auto) = super::png_exposure(params, &args.scene, &out.image, &out.gbuffer);
-    if auto && outputs.png.is_some() && say::normal() {
-        sensorlight::errln!("{}", super::auto_exposure_text(exposure));
+    if let (Some(text), Some(_), true) = (&auto, &outputs.png, say::normal()) {
+        sensorlight::errln!("{text}");
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
@@ -307,7 +310,7 @@ fn write_outputs(
     if let Some(path) = &args.write_scene {
         // The scene file renders as the mesh did: its automatic exposure written down.
         let mut render = scene.render.clone();
-        if auto {
+        if auto.is_some() {
             render.insert("exposure".into(), toml::Value::Float(format!("{exposure:.1}").parse().unwrap_or(0.0)));
         }
         files.stage_bytes(path, scene.to_toml_with(path, &render)?.as_bytes())?;

@@ -35,13 +35,21 @@ pub struct ViewArgs {
     look: LookFlags,
     #[command(flatten)]
     engine: EngineFlags,
-    /// Drive the window from a file of commands, one a line: wait done, wait round N, sync, orbit YAW PITCH,
-    /// pan X Y, dolly F, exposure STOPS, show VIEW, save F.exr, quit (docs/DESIGN.md §12)
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help = script_help())]
     script: Option<PathBuf>,
     /// Say each camera move's time to its first picture, and their median when the window closes
     #[arg(long)]
     timings: bool,
+}
+
+/// `--script`'s help, with the views `show` takes as the viewer names them.
+fn script_help() -> String {
+    let views: Vec<&str> = viewer::Show::ALL.iter().map(|s| s.word()).collect();
+    format!(
+        "Drive the window from a file of commands, one a line: wait done, wait round N, sync, orbit YAW PITCH, pan \
+         X Y, dolly F, exposure STOPS, show VIEW ({}), save F.exr, resize WIDTH HEIGHT, quit (docs/DESIGN.md §12)",
+        views.join(" | ")
+    )
 }
 
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
@@ -126,7 +134,7 @@ impl ViewHost for CliHost<'_> {
 
     fn exposure(&self, output: &RenderOutput) -> Option<f32> {
         let (stops, auto) = super::png_exposure(self.params, &self.args.scene, &output.image, &output.gbuffer);
-        auto.then_some(stops)
+        auto.map(|_| stops)
     }
 
     fn save(&mut self, output: &RenderOutput, camera: &Camera, exposure: f32, path: &Path) -> Result<Vec<PathBuf>> {

@@ -44,7 +44,9 @@ pub fn albedo_warnings(mesh: &Mesh) -> Vec<String> {
     (mesh.materials.iter().zip(brightest))
         .filter_map(|(m, albedo)| albedo.filter(|a| a.max_element() > MAX_ALBEDO).map(|a| (m, a)))
         .map(|(m, a)| {
-            let what = if a == m.kd { "has Kd".to_owned() } else { "reflects (Kd × its texture's mean)".to_owned() };
+            let albedo = m.format.albedo_word();
+            let what =
+                if a == m.kd { format!("has {albedo}") } else { format!("reflects ({albedo} × its texture's mean)") };
             format!(
                 "material '{}' {what} {} {} {}: global illumination's bounces use at most {MAX_ALBEDO} per channel \
                  (at 1 a closed room would reflect its light forever)",

@@ -51,6 +51,7 @@ use rayon::prelude::*;
 
 use super::lights::{LUMINANCE, Lights};
 use super::sampling::{HashedStream, ScrambledSobol, cosine_hemisphere, hash};
+use crate::cancel::{Cancel, Cancelled};
 use crate::gbuffer::GBufferData;
 use crate::gbuffer::cast as gbuffer;
 use crate::params::{Antialiasing, EstimatorParams};
@@ -377,12 +378,29 @@ impl<'a> Integrator<'a> {
     /// ([`Self::pixel_estimate`]). The G-buffer is the centres' either way (the AOVs, the masks of `compare`).
     /// `progress` is called with the number of rows finished, from worker threads.
     pub fn render(&self, size: ImageSize, aa: Antialiasing, progress: &(dyn Fn(u64) + Sync)) -> ReferenceImage {
+        match self.render_until(size, aa, progress, &Cancel::new()) {
+            Ok(image) => image,
+            Err(Cancelled(_)) => unreachable!("nothing cancels a flag of its own"),
+        }
+    }
+
+    /// [`Self::render`], stopped once `cancel` is set: the rows begun are finished, the rest skipped.
+    pub fn render_until(
+        &self,
+        size: ImageSize,
+        aa: Antialiasing,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &Cancel,
+    ) -> Result<ReferenceImage, Cancelled> {
         let g = gbuffer::cast(self.scene, &self.bvh, size);
         let width = size.width as usize;
         // Per pixel: (image, R) estimates and rays; `None` where a centre sample shows no surface.
         let estimates: Vec<Option<(Estimate, Estimate, u64)>> = (0..size.height as usize)
             .into_par_iter()
             .flat_map_iter(|y| {
+                if cancel.reason().is_some() {
+                    return Vec::new();
+                }
                 let row: Vec<_> = (y * width..(y + 1) * width)
                     .map(|i| match aa {
                         Antialiasing::On => Some(self.pixel_estimate(((i % width) as u32, y as u32), size, i as u64)),
@@ -401,6 +419,7 @@ impl<'a> Integrator<'a> {
                 row
             })
             .collect();
+        cancel.check()?;
         // Alpha: 1 where the pixel's centre shows a surface (as the GPU G-buffer's coverage). A pixel without
         // an estimate (`Off`, no surface) shows the sky along its centre's ray.
         let sky_at = |i: usize| {
@@ -416,7 +435,7 @@ impl<'a> Integrator<'a> {
                 .collect::<Vec<Vec4>>()
         };
         let zero = |_| Vec3::ZERO;
-        ReferenceImage {
+        Ok(ReferenceImage {
             image: field(&|e| e.0.mean, &sky_at),
             image_std_error: field(&|e| e.0.std_error, &zero),
             radiance: field(&|e| e.1.mean, &zero),
@@ -424,7 +443,7 @@ impl<'a> Integrator<'a> {
             rays: g.position.len() as u64 * (aa == Antialiasing::Off) as u64
                 + estimates.iter().flatten().map(|e| e.2).sum::<u64>(),
             gbuffer: g,
-        }
+        })
     }
 }
 

@@ -28,7 +28,7 @@ use anyhow::{Context as _, Result, bail, ensure};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
-use super::obj::{Cutout, Material, ObjData, ObjGroup};
+use super::obj::{Cutout, Material, MaterialFormat, ObjData, ObjGroup};
 use super::texture::Texture;
 use super::{Camera, Sun};
 
@@ -164,6 +164,8 @@ fn read(path: &Path) -> Result<GltfData> {
         sun: None,
         lights: Vec::new(),
         instances: 0,
+        material_notes: Vec::new(),
+        used_materials: Vec::new(),
     };
     reader.materials(&gltf.document)?;
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
@@ -172,6 +174,11 @@ fn read(path: &Path) -> Result<GltfData> {
         reader.node(&node, Mat4::IDENTITY, &mut Vec::new())?;
     }
     reader.punctual_lights();
+    for (material, note) in std::mem::take(&mut reader.material_notes) {
+        if reader.used_materials[material] {
+            reader.warn(note);
+        }
+    }
     let Reader { mut mesh, camera, sun, .. } = reader;
     mesh.files = dedup(files);
     Ok(GltfData { mesh, camera, sun })
@@ -199,6 +206,11 @@ struct Reader<'a> {
     lights: Vec<(Vec3, Vec3, String)>,
     /// Node instances visited so far ([`MAX_INSTANCES`]).
     instances: usize,
+    /// What is said of each material (what of it is not used), once a primitive uses it: a material no
+    /// primitive uses is not worth a word.
+    material_notes: Vec<(usize, String)>,
+    /// The glTF materials primitives use, by index (the default last).
+    used_materials: Vec<bool>,
 }
 
 impl Reader<'_> {
@@ -216,10 +228,11 @@ impl Reader<'_> {
             let mut unused = Vec::new();
             let kd_map = self.texture(&name, "base colour", pbr.base_color_texture(), &mut unused)?;
             let ke_map = self.texture(&name, "emissive", m.emissive_texture(), &mut unused)?;
+            let index = self.mesh.materials.len();
             if ke_map.is_some() && ke.max_element() <= 0.0 {
-                self.warn(format!(
-                    "material '{name}': its emissive texture is multiplied by factor 0: it emits nothing"
-                ));
+                let note =
+                    format!("material '{name}': its emissive texture is multiplied by factor 0: it emits nothing");
+                self.material_notes.push((index, note));
             }
             if pbr.metallic_factor() > 0.0 {
                 unused.push("metalness (treated as diffuse)".into());
@@ -240,16 +253,19 @@ impl Reader<'_> {
                 cutout = None;
             }
             if !unused.is_empty() {
-                self.warn(format!("material '{name}': {} not used", unused.join(", ")));
+                self.material_notes.push((index, format!("material '{name}': {} not used", unused.join(", "))));
             }
             self.mesh.materials.push(Material {
                 kd_map,
                 ke_map,
                 cutout,
+                format: MaterialFormat::Gltf,
                 ..Material::new(&name, Vec3::new(r, g, b), ke)
             });
         }
-        self.mesh.materials.push(Material::new("(glTF default, white)", Vec3::ONE, Vec3::ZERO));
+        let default = Material::new("(glTF default, white)", Vec3::ONE, Vec3::ZERO);
+        self.mesh.materials.push(Material { format: MaterialFormat::Gltf, ..default });
+        self.used_materials = vec![false; self.mesh.materials.len()];
         Ok(())
     }
 
@@ -433,7 +449,9 @@ impl Reader<'_> {
             if normals.as_ref().is_some_and(|n| n.len() != positions.len()) {
                 bail!("{}: NORMAL and POSITION have different counts", where_());
             }
-            let material_index = material.index().unwrap_or(self.mesh.materials.len() - 1);
+            // The default is last of the file's materials (copies without textures come after it).
+            let material_index = material.index().unwrap_or(self.used_materials.len() - 1);
+            self.used_materials[material_index] = true;
             let m = &self.mesh.materials[material_index];
             let uvs: Option<Vec<Vec2>> = match m.is_textured() {
                 true => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),

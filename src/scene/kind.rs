@@ -27,7 +27,11 @@ impl FileKind {
         if read.is_err() {
             return Self::Scene;
         }
-        Self::sniff(&head).unwrap_or_else(|| Self::by_extension(path))
+        match Self::sniff(&head) {
+            // A `.glb` whose magic is wrong: its loader says what is wrong with it.
+            Some(Self::Binary) if Self::by_extension(path) == Self::GltfMesh => Self::GltfMesh,
+            sniffed => sniffed.unwrap_or_else(|| Self::by_extension(path)),
+        }
     }
 
     /// The kind the content shows, if it shows one.

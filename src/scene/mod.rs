@@ -146,6 +146,16 @@ impl Mesh {
     ) -> Result<Self> {
         let surfaces::Assigned { triangles, normals: shading, uvs, surfaces, dropped } =
             surfaces::assign(groups, &materials);
+        if let Some((group, v)) = &dropped.first_not_finite {
+            bail!(
+                "{} triangle(s) with a corner that is not a finite number (the first, in group '{group}': {}, {}, \
+                 {})",
+                dropped.not_finite,
+                v[0],
+                v[1],
+                v[2]
+            );
+        }
         if let Some((group, v)) = &dropped.first_overflowing {
             bail!(
                 "{} triangle(s) too large for 32-bit floats: their area overflows (the first, in group '{group}': \
@@ -363,8 +373,12 @@ impl Mesh {
         for m in used.iter().map(|&m| &self.materials[m]) {
             if m.kd.max_element() > 1.0 {
                 warnings.push(format!(
-                    "material '{}' has Kd {} {} {}, above 1: it reflects more light than it receives (energy gain)",
-                    m.name, m.kd.x, m.kd.y, m.kd.z
+                    "material '{}' has {} {} {} {}, above 1: it reflects more light than it receives (energy gain)",
+                    m.name,
+                    m.format.albedo_word(),
+                    m.kd.x,
+                    m.kd.y,
+                    m.kd.z
                 ));
             }
         }

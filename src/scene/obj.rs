@@ -46,6 +46,26 @@ pub struct Material {
     pub ke_map: Option<usize>,
     /// Where it is cut out (`map_d`, glTF `alphaMode` MASK): no light is sent or stopped there.
     pub cutout: Option<Cutout>,
+    /// The format it was read from: messages about it use that format's words.
+    pub format: MaterialFormat,
+}
+
+/// The file format a material was read from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MaterialFormat {
+    #[default]
+    Mtl,
+    Gltf,
+}
+
+impl MaterialFormat {
+    /// What the format calls the albedo: MTL's `Kd`, glTF's base colour.
+    pub fn albedo_word(self) -> &'static str {
+        match self {
+            Self::Mtl => "Kd",
+            Self::Gltf => "base colour",
+        }
+    }
 }
 
 /// An alpha test: a point of the surface exists where its texture's alpha there (bilinear, full resolution)
@@ -71,7 +91,7 @@ impl Material {
 
     /// A flat-coloured material: albedo `kd`, emitted radiance `ke`, no texture.
     pub fn new(name: &str, kd: Vec3, ke: Vec3) -> Self {
-        Self { name: name.to_owned(), kd, ke, kd_map: None, ke_map: None, cutout: None }
+        Self { name: name.to_owned(), kd, ke, kd_map: None, ke_map: None, cutout: None, format: MaterialFormat::Mtl }
     }
 
     /// The same material without its textures: what a surface that gives no texture coordinates uses.
@@ -349,7 +369,8 @@ impl TextureFiles {
         let path = &key.0;
         let index = match std::fs::read(path) {
             Ok(bytes) => {
-                let name = path.display().to_string();
+                // Its name alone: the error names the path already.
+                let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.display().to_string());
                 let decoded = match usage {
                     TextureUse::Colour | TextureUse::Emission => Texture::decode(&bytes, &name),
                     TextureUse::Mask => Texture::decode_mask(&bytes, &name),

@@ -21,6 +21,9 @@ pub struct Dropped {
     /// Triangles whose area (or edge lengths squared) overflows f32, with the first one and its group.
     pub overflowing: usize,
     pub first_overflowing: Option<(String, [Vec3; 3])>,
+    /// Triangles with a corner that is not a finite number (NaN, infinite), with the first one and its group.
+    pub not_finite: usize,
+    pub first_not_finite: Option<(String, [Vec3; 3])>,
 }
 
 /// What [`assign`] makes of the groups.
@@ -63,6 +66,10 @@ pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> Assigned {
                 Shape::Overflow => {
                     dropped.overflowing += 1;
                     dropped.first_overflowing.get_or_insert_with(|| (group.name.clone(), v));
+                }
+                Shape::NotFinite => {
+                    dropped.not_finite += 1;
+                    dropped.first_not_finite.get_or_insert_with(|| (group.name.clone(), v));
                 }
             }
         }
@@ -137,9 +144,14 @@ pub enum Shape {
     Degenerate,
     /// Finite corners, but twice its area or an edge length squared is beyond f32 (edges ≳ 1.8e19).
     Overflow,
+    /// A corner is NaN or infinite.
+    NotFinite,
 }
 
 pub fn face_normal(v: [Vec3; 3]) -> Shape {
+    if !v.iter().all(|p| p.is_finite()) {
+        return Shape::NotFinite;
+    }
     let cross = (v[1] - v[0]).cross(v[2] - v[0]);
     let longest =
         (v[1] - v[0]).length_squared().max((v[2] - v[1]).length_squared()).max((v[0] - v[2]).length_squared());
