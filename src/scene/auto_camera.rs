@@ -22,8 +22,12 @@ pub const VFOV_DEG: f32 = 40.0;
 pub const DEFAULT_IMAGE: ImageSize = ImageSize { width: 256, height: 256 };
 /// An axis counts as thin (the mesh is a floor plan, a wall) below this fraction of the largest extent.
 const THIN: f32 = 0.25;
-/// Room around the bounding sphere, as a factor of the distance that just fits it.
+/// Room around the box's projection, as a factor of the distance that just fits it.
 const MARGIN: f32 = 1.05;
+/// How far a camera that sees the mesh from the side looks down on it, degrees: a floor is not seen
+/// edge-on, and a model shows its top. Not where the mesh is open towards the camera (a box seen through
+/// its opening, whose ceiling and lamp a view from above would hide behind its front edge).
+pub const ELEVATION_DEG: f32 = 15.0;
 /// The camera turns round to the other side of its axis when that side shows this much more front-facing
 /// area: a box open on one side (the Cornell box, a room without its fourth wall) is seen through the
 /// opening, and a closed mesh, about as much front on either side, keeps the usual side.
@@ -53,7 +57,18 @@ pub fn for_mesh(mesh: &Mesh, size: ImageSize) -> Result<(Camera, Placement)> {
     let front_area = |forward: Vec3| -> f32 {
         mesh.triangles.iter().map(|t| triangle_area(&t.v) * (-t.normal.dot(forward)).max(0.0)).sum()
     };
-    Ok((frame(&mesh.bounds, size, front_area)?, Placement::Outside))
+    Ok((frame(&framed_bounds(mesh), size, front_area)?, Placement::Outside))
+}
+
+/// What the outside camera frames: the mesh without its emitters, where it has anything else. A panel that
+/// only lights the scene (a sky above a gazebo, a large area light) would otherwise set the frame, and
+/// the model would be a few pixels in its middle; an emitter within the model is inside its box anyway.
+fn framed_bounds(mesh: &Mesh) -> Aabb {
+    let mut bounds = Aabb::EMPTY;
+    for t in mesh.triangles.iter().filter(|t| !mesh.material_of(t.surface).is_emitter()) {
+        t.v.iter().for_each(|&p| bounds.grow(p));
+    }
+    if bounds.min.cmple(bounds.max).all() { bounds } else { mesh.bounds }
 }
 
 /// Where [`for_mesh`] put the camera.
@@ -159,9 +174,10 @@ fn fibonacci_direction(k: usize, n: usize) -> Vec3 {
 }
 
 /// A camera that sees all of `bounds` in an image of `size`: it looks along −z (y up), or, when the box is
-/// thin along x or y, across that thinnest extent, from a distance at which the box's bounding sphere fits
-/// the narrower of the two fields of view. Along that axis it looks from the side whose faces turn their
-/// fronts to it: `front_area(forward)` is the mesh's area facing a camera that looks along `forward`.
+/// thin along x or y, across that thinnest extent. Along that axis it looks from the side whose faces turn
+/// their fronts to it (`front_area(forward)` is the mesh's area facing a camera that looks along
+/// `forward`); from the side, it looks down by [`ELEVATION_DEG`] unless the mesh is open towards it. It
+/// stands where the box's eight corners just fit the image ([`MARGIN`]), so that the mesh fills the frame.
 pub fn frame(bounds: &Aabb, size: ImageSize, front_area: impl Fn(Vec3) -> f32) -> Result<Camera> {
     let extent = bounds.max - bounds.min;
     let largest = extent.max_element();
@@ -178,11 +194,52 @@ pub fn frame(bounds: &Aabb, size: ImageSize, front_area: impl Fn(Vec3) -> f32) -
             up = Vec3::Z; // seen from below, +z at the top
         }
     }
+    let open_towards_camera = front_area(forward) > TURN * front_area(-forward);
+    if forward.y == 0.0 && !open_towards_camera {
+        let elevation = ELEVATION_DEG.to_radians();
+        forward = forward * elevation.cos() - Vec3::Y * elevation.sin();
+    }
+    // The distance at which every corner projects within the image: a corner at `x` across and `z` beyond
+    // the target needs `|x| / (d + z) ≤ tan(half field of view) / MARGIN`. Perspective draws the far
+    // corners smaller, so the target then moves to the middle of the corners' projection and the distance
+    // is fitted again (a few times: each fit moves the middle a little).
+    let right = forward.cross(up).normalize();
+    let true_up = right.cross(forward);
+    let (tan_v, aspect) = ((0.5 * VFOV_DEG.to_radians()).tan(), size.width as f32 / size.height as f32);
     let radius = (0.5 * extent.length()).max(f32::MIN_POSITIVE);
-    let half_v = 0.5 * VFOV_DEG.to_radians();
-    let half_h = (half_v.tan() * size.width as f32 / size.height as f32).atan();
-    let distance = MARGIN * radius / half_v.min(half_h).sin();
-    let center = bounds.center();
+    let corners: Vec<Vec3> = (0..8)
+        .map(|i| {
+            let pick = |bit: usize, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+            Vec3::new(
+                pick(1, bounds.min.x, bounds.max.x),
+                pick(2, bounds.min.y, bounds.max.y),
+                pick(4, bounds.min.z, bounds.max.z),
+            )
+        })
+        .collect();
+    // Each corner seen from a target: across, up and beyond it.
+    let seen = |target: Vec3| {
+        corners
+            .iter()
+            .map(move |&c| (c - target).dot(right))
+            .zip(corners.iter().map(move |&c| ((c - target).dot(true_up), (c - target).dot(forward))))
+    };
+    let fit = |target: Vec3| {
+        seen(target)
+            .map(|(x, (y, z))| (MARGIN * (x.abs() / (tan_v * aspect)).max(y.abs() / tan_v) - z).max(1e-3 * radius - z))
+            .fold(f32::MIN_POSITIVE, f32::max)
+    };
+    let (mut center, mut distance) = (bounds.center(), fit(bounds.center()));
+    for _ in 0..4 {
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+        for (x, (y, z)) in seen(center) {
+            let at = glam::Vec2::new(x, y) / (distance + z);
+            (lo, hi) = (lo.min(at), hi.max(at));
+        }
+        let middle = 0.5 * (lo + hi) * distance;
+        center += right * middle.x + true_up * middle.y;
+        distance = fit(center);
+    }
     Camera::look_at(center - forward * distance, center, up, VFOV_DEG)
 }
 
@@ -235,7 +292,35 @@ mod tests {
         let floor = Aabb { min: Vec3::new(-5.0, 0.0, -3.0), max: Vec3::new(5.0, 0.1, 3.0) };
         assert_eq!(frame(&floor, DEFAULT_IMAGE, |_| 0.0).unwrap().forward, Vec3::NEG_Y);
         let cube = Aabb { min: Vec3::ZERO, max: Vec3::ONE };
-        assert_eq!(frame(&cube, DEFAULT_IMAGE, |_| 0.0).unwrap().forward, Vec3::NEG_Z);
+        assert!(frame(&cube, DEFAULT_IMAGE, |_| 0.0).unwrap().forward.dot(Vec3::NEG_Z) > 0.96);
+    }
+
+    /// Seen from the side, a mesh is looked down on by [`ELEVATION_DEG`] (a floor is not edge-on), and
+    /// its box fills the image's narrower side but for the margin (issue 42, item 7: a bare mesh filled
+    /// half the frame); a box open towards the camera is seen straight through its opening.
+    #[test]
+    fn a_mesh_seen_from_the_side_is_looked_down_on_and_fills_the_frame() {
+        let cube = Aabb { min: Vec3::ZERO, max: Vec3::splat(2.0) };
+        for (width, height) in [(256, 256), (640, 240), (200, 400)] {
+            let size = ImageSize { width, height };
+            let camera = frame(&cube, size, |_| 0.0).unwrap();
+            let down = (-camera.forward.y).asin().to_degrees();
+            assert!((down - ELEVATION_DEG).abs() < 1e-3, "looks down {down}°");
+            assert_framed_camera(&cube, size, &camera);
+            // The corners' extent across the narrower side of the image, in normalised device coordinates.
+            let view_proj = camera.view_proj(width, height, 1e-3);
+            let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+            for i in 0..8 {
+                let corner = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32) * 2.0;
+                let clip = view_proj * corner.extend(1.0);
+                let ndc = clip.truncate().truncate() / clip.w;
+                (lo, hi) = (lo.min(ndc), hi.max(ndc));
+            }
+            let filled = if width <= height { hi.x - lo.x } else { hi.y - lo.y };
+            assert!(filled > 2.0 / MARGIN - 0.05, "{width}×{height}: the box spans {filled} of 2");
+        }
+        let open = |forward: Vec3| if forward == Vec3::NEG_Z { 5.0 } else { 1.0 };
+        assert_eq!(frame(&cube, DEFAULT_IMAGE, open).unwrap().forward, Vec3::NEG_Z);
     }
 
     /// A box open towards −z shows its inside's fronts to a camera looking along +z: it turns round. About
@@ -246,7 +331,7 @@ mod tests {
         let open_towards_neg_z = |forward: Vec3| if forward == Vec3::Z { 5.0 } else { 1.0 };
         assert_eq!(frame(&cube, DEFAULT_IMAGE, open_towards_neg_z).unwrap().forward, Vec3::Z);
         let closed = |forward: Vec3| if forward == Vec3::Z { 1.1 } else { 1.0 };
-        assert_eq!(frame(&cube, DEFAULT_IMAGE, closed).unwrap().forward, Vec3::NEG_Z);
+        assert!(frame(&cube, DEFAULT_IMAGE, closed).unwrap().forward.dot(Vec3::NEG_Z) > 0.96);
         let floor = Aabb { min: Vec3::new(-5.0, 0.0, -3.0), max: Vec3::new(5.0, 0.1, 3.0) };
         let ceiling = |forward: Vec3| if forward == Vec3::Y { 5.0 } else { 0.0 };
         let below = frame(&floor, DEFAULT_IMAGE, ceiling).unwrap();
@@ -307,6 +392,26 @@ mod inside_tests {
         assert_eq!(for_mesh(&room(-2.9, Vec3::Z, true), DEFAULT_IMAGE).unwrap().1, Placement::Outside);
         // A lit object, not a room: its only light faces away from the centre.
         assert_eq!(for_mesh(&room(-3.01, Vec3::NEG_Z, false), DEFAULT_IMAGE).unwrap().1, Placement::Outside);
+    }
+
+    /// A model under a panel that only lights it (the gazebo's sky, 40 × 40 m, 20 m up) is framed without
+    /// the panel: the model is not a few pixels in the middle of the panel's frame.
+    #[test]
+    fn a_panel_that_only_lights_is_left_out_of_the_frame() {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+        let groups = vec![
+            ("floor", 0, rect(Vec3::ZERO, 2.0 * x, 2.0 * z, y)),
+            ("post", 0, rect(Vec3::new(0.0, 1.0, 0.0), 0.2 * x, 1.0 * y, z)),
+            ("sky", 1, rect(20.0 * y, 20.0 * x, 20.0 * z, -y)),
+        ];
+        let m = |name: &str, kd: f32, ke: f32| Material::new(name, Vec3::splat(kd), Vec3::splat(ke));
+        let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0).unwrap();
+        let mesh = from_groups(groups, vec![m("white", 0.7, 0.0), m("sky", 0.0, 1.0)], camera, DEFAULT_IMAGE).mesh;
+        let framed = framed_bounds(&mesh);
+        assert_eq!((framed.min, framed.max), (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 2.0, 2.0)));
+        let (camera, placement) = for_mesh(&mesh, DEFAULT_IMAGE).unwrap();
+        assert_eq!(placement, Placement::Outside);
+        assert!(camera.eye.length() < 20.0, "the camera frames the model, not the sky: {}", camera.eye);
     }
 
     #[test]
