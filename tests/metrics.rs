@@ -57,6 +57,10 @@ fn quick_metrics_write_every_output_consistently() {
     for (row, run) in table1.iter().zip(runs.iter().filter(|r| r["experiment"] == "table1")) {
         assert_eq!(row[3].parse::<u64>().unwrap(), run["stats"]["sensors"].as_u64().unwrap());
     }
+    // Table I at the paper's resolutions: its values beside ours on every row, none missing ("–").
+    let markdown = std::fs::read_to_string(dir.join("table1.md")).unwrap();
+    assert!(["200x200", "300x200", "400x300"].iter().all(|r| markdown.contains(r)), "{markdown}");
+    assert!(markdown.contains("15240") && !markdown.contains("–"), "{markdown}");
     assert_eq!(csv_rows(&dir.join("figures.csv")).len(), 9);
     let fig11 = std::fs::read_to_string(dir.join("fig11.md")).unwrap();
     assert!(["80x60", "120x90", "160x120"].iter().all(|r| fig11.contains(r)));
@@ -121,4 +125,19 @@ fn metrics_run_from_another_directory_and_end_lines() {
     for file in ["table1.csv", "table1.md"] {
         assert!(std::fs::read_to_string(dir.join("out").join(file)).unwrap().ends_with('\n'), "{file}");
     }
+}
+
+/// `metrics --help` says `render`'s shared flags as they act in `metrics` (issue 42, item 11): ε defaults to
+/// the paper's 0.1, not to global illumination; no bare mesh is lit by a white sky; the filter's default
+/// is the paper's estimator's.
+#[test]
+fn metrics_help_speaks_of_metrics() {
+    let run = common::sensorlight(&["metrics", "--help"]);
+    let help = String::from_utf8_lossy(&run.stdout).into_owned();
+    assert!(run.status.success(), "{help}");
+    for render_words in ["default: global illumination", "given to render or reference", "paper's estimator: 2)"] {
+        assert!(!help.contains(render_words), "{render_words:?} in {help}");
+    }
+    assert!(help.contains("Kd·ε (≥ 0; 0 = direct light only) [default: 0.1]"), "{help}");
+    assert!(help.contains("[default: 2 with the paper's estimator, 0 with --estimator exact]"), "{help}");
 }

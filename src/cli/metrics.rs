@@ -8,7 +8,9 @@ use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 use sensorlight::cancel::{Cancel, Reason};
 use sensorlight::metrics::{self, MetricsConfig, report};
-use sensorlight::params::{EstimatorKind, Overrides, RenderParams, SensorShape};
+use sensorlight::params::{
+    DEFAULT_EPSILON, DEFAULT_FILTER_RADIUS, EstimatorKind, Overrides, RenderParams, SensorShape,
+};
 use sensorlight::renderer::Progress;
 use sensorlight::scene::ImageSize;
 use sensorlight::strategy::{Cache, StrategyRequest};
@@ -16,7 +18,18 @@ use sensorlight::strategy::{Cache, StrategyRequest};
 use super::args::{EstimatorFlags, RefinementFlags, estimator_help};
 
 #[derive(Args)]
+// `render`'s flags, said as they act here: the paper's model and estimator, no mesh lit by a white sky.
 #[command(mut_arg("sensor", |a| a.help(format!("Sensor kind [default: {}, the paper's]", SensorShape::Frustum))))]
+#[command(mut_arg("epsilon", |a| a.help(format!(
+    "ε of the paper's model: non-emitters seen by a sensor return Kd·ε (≥ 0; 0 = direct light only) [default: \
+     {DEFAULT_EPSILON}]"
+))))]
+#[command(mut_arg("background", |a| a.help("Radiance of rays leaving the scene, as R,G,B [default: 0,0,0]")))]
+#[command(mut_arg("filter_radius", |a| a.help(format!(
+    "Radius of the id-constrained Gaussian filter in pixels (0 = off) [default: {} with the paper's estimator, {} \
+     with --estimator exact]",
+    DEFAULT_FILTER_RADIUS.paper, DEFAULT_FILTER_RADIUS.exact
+))))]
 pub struct MetricsArgs {
     /// Output directory (created if needed): CSV, Markdown, SVG and PNG per experiment, and metrics.json
     #[arg(short, long)]

@@ -83,10 +83,11 @@ impl MetricsConfig {
         }
     }
 
-    /// A reduced run (a couple of minutes on a CPU driver): small resolutions and maps.
+    /// A reduced run (a couple of minutes on a CPU driver): small maps, Table I at the paper's three smallest
+    /// resolutions (so that its values stand beside ours), the figures at smaller ones.
     pub fn quick(mut self) -> Self {
         let size = |width, height| ImageSize { width, height };
-        self.table1_resolutions = vec![size(100, 100), size(150, 100), size(200, 150)];
+        self.table1_resolutions = PAPER_TABLE1[..3].iter().map(|&(w, h, _, _)| size(w, h)).collect();
         self.table1_sensor_size = 32;
         self.figure_resolutions = vec![size(80, 60), size(120, 90), size(160, 120)];
         self.figure_sizes = vec![16, 32, 64];

@@ -155,14 +155,34 @@ impl Chart<'_> {
         }
         match (self.log_x, self.log_y) {
             (true, true) => {
-                finish!(builder.build_cartesian_2d((x0..x1).log_scale().base(2.0), (y0..y1).log_scale()).map_err(err)?)
+                let y = (y0..y1).log_scale().with_key_points(log_ticks(y0, y1));
+                finish!(builder.build_cartesian_2d((x0..x1).log_scale().base(2.0), y).map_err(err)?)
             }
             (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale().base(2.0), y0..y1).map_err(err)?),
-            (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale()).map_err(err)?),
+            (false, true) => {
+                let y = (y0..y1).log_scale().with_key_points(log_ticks(y0, y1));
+                finish!(builder.build_cartesian_2d(x0..x1, y).map_err(err)?)
+            }
             (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?),
         }
         Ok(())
     }
+}
+
+/// Ticks of a log axis over `[lo, hi]`: 1, 2 and 5 times each power of ten within it, and every digit's
+/// where that gives fewer than four (plotters' own labelled only a few values of the range, e.g. 0.1 to 0.3
+/// of an axis running from 0.04 to 3).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let within = |digits: &[f64]| -> Vec<f64> {
+        let (first, last) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (first..=last)
+            // Divided by an exact power of ten below 1, so that 3 · 0.1 is 0.3 as written.
+            .flat_map(|e| digits.iter().map(move |d| if e >= 0 { d * 10f64.powi(e) } else { d / 10f64.powi(-e) }))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect()
+    };
+    let ticks = within(&[1.0, 2.0, 5.0]);
+    if ticks.len() >= 4 { ticks } else { within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]) }
 }
 
 #[cfg(test)]
@@ -180,6 +200,26 @@ mod tests {
         assert_eq!(tick(&1234.4), "1234");
         assert_eq!(tick(&0.0), "0");
         assert_eq!(tick(&-0.25), "-0.25");
+    }
+
+    #[test]
+    fn a_log_axis_is_labelled_over_its_whole_range() {
+        assert_eq!(log_ticks(0.04, 3.0), [0.05, 0.1, 0.2, 0.5, 1.0, 2.0]);
+        assert_eq!(log_ticks(0.12, 0.45), [0.2, 0.3, 0.4]);
+        let points = vec![(16.0, 0.05), (64.0, 0.4), (256.0, 2.5)];
+        let chart = Chart {
+            title: "t",
+            x_label: "x",
+            y_label: "y",
+            log_x: true,
+            log_y: true,
+            series: vec![Series { name: "s".into(), points, dashed: false }],
+        };
+        let svg = chart.svg().unwrap();
+        let labels: Vec<&str> = svg.split('>').filter_map(|t| t.split('<').next()).map(str::trim).collect();
+        for label in ["0.05", "0.1", "0.5", "1", "2"] {
+            assert!(labels.contains(&label), "no tick {label}: {labels:?}");
+        }
     }
 
     #[test]
