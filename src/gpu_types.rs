@@ -32,7 +32,7 @@ pub struct GpuSurface {
     /// Its emission texture's index + 1, 0 for none: what is seen of an emitter's front is `Ke` times it.
     pub ke_map: u32,
     /// Its cut-out's texture index + 1, 0 for none: a fragment whose texture alpha (bilinear, level 0) is
-    /// under `alpha_threshold` is discarded (`obj::Cutout`).
+    /// under `alpha_threshold` is discarded (`material::Cutout`).
     pub alpha_map: u32,
     pub alpha_threshold: f32,
 }

@@ -24,7 +24,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use sensorlight::params::{Overrides, RenderParams};
 use sensorlight::scene::Scene;
-use sensorlight::scene::obj::LoadError;
+use sensorlight::scene::material::LoadError;
 
 /// Longest a load of these small files may take (they load in well under a millisecond).
 const DEADLINE: Duration = Duration::from_secs(10);

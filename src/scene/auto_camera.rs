@@ -344,7 +344,7 @@ mod tests {
 mod inside_tests {
     use super::*;
     use crate::scene::builtin::{from_groups, rect};
-    use crate::scene::obj::Material;
+    use crate::scene::material::Material;
 
     /// A closed box 4 × 2.5 × 6 (longest along z) with a light panel on the wall at z = `light_z` facing
     /// `facing`; `open` leaves out the +z wall.

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::obj::{Material, ObjGroup};
+use super::material::{Group, Material};
 use super::{Camera, ImageSize, Mesh, Scene};
 
 /// Two triangles covering the rectangle `center ± half_u ± half_v`, wound so that the front faces `facing`.
@@ -19,9 +19,9 @@ pub fn from_groups(
     camera: Camera,
     size: ImageSize,
 ) -> Scene {
-    let groups: Vec<ObjGroup> = groups
+    let groups: Vec<Group> = groups
         .into_iter()
-        .map(|(name, material, triangles)| ObjGroup {
+        .map(|(name, material, triangles)| Group {
             name: name.into(),
             material,
             triangles,

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use super::obj::Cutout;
+use super::material::Cutout;
 use super::ray::{Ray, RayShear};
 use super::{Aabb, Mesh, Texture, Triangle};
 

@@ -1,5 +1,5 @@
 //! glTF 2.0 scenes (`.gltf` with its buffers, or `.glb`), read into the same groups and materials as an OBJ
-//! (`obj::ObjData`), through the `gltf` crate.
+//! (`material::Imported`), through the `gltf` crate.
 //!
 //! What is read, and how it maps onto sensorlight's model (a diffuse `Kd` emitting `Ke`):
 //! - the default scene's node tree (else the first scene's), each node's mesh under its world transform
@@ -10,7 +10,7 @@
 //!   colour texture (`Material::kd_map`, as an OBJ's `map_Kd`), its emissive factor times
 //!   `KHR_materials_emissive_strength` as `Ke` and its emissive texture (`TEXCOORD_0`) as
 //!   `Material::ke_map` (an OBJ's `map_Ke`); `alphaMode` MASK cuts a primitive out where the factor's alpha is
-//!   under the cutoff, and with a base colour texture where factor × texture alpha is (`obj::Cutout`), BLEND
+//!   under the cutoff, and with a base colour texture where factor × texture alpha is (`material::Cutout`), BLEND
 //!   is drawn opaque (said); other textures, metalness and roughness are named once per material as not
 //!   used yet; the glTF default material is white (`Kd` 1);
 //! - the first camera met in the tree (perspective), as the scene's camera where the scene file names none;
@@ -28,7 +28,7 @@ use anyhow::{Context as _, Result, bail, ensure};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::mesh::Mode;
 
-use super::obj::{Cutout, Material, MaterialFormat, ObjData, ObjGroup};
+use super::material::{Cutout, Group, Imported, Material, MaterialFormat};
 use super::texture::Texture;
 use super::{Camera, Sun};
 
@@ -44,7 +44,7 @@ const MAX_INSTANCES: usize = 1 << 20;
 
 /// What a glTF file gives: the groups and materials, and the first camera in its tree.
 pub struct GltfData {
-    pub mesh: ObjData,
+    pub mesh: Imported,
     pub camera: Option<Camera>,
     /// The first directional light, as the sun.
     pub sun: Option<Sun>,
@@ -157,7 +157,7 @@ fn read(path: &Path) -> Result<GltfData> {
         path,
         base,
         buffers: &buffers,
-        mesh: ObjData::default(),
+        mesh: Imported::default(),
         images: Vec::new(),
         untextured: Vec::new(),
         camera: None,
@@ -195,7 +195,7 @@ struct Reader<'a> {
     /// Where relative URIs start.
     base: &'a Path,
     buffers: &'a [gltf::buffer::Data],
-    mesh: ObjData,
+    mesh: Imported,
     /// Each glTF image read so far: its index in `mesh.textures`, `None` where it could not be read.
     images: Vec<(usize, Option<usize>)>,
     /// Each textured material's copy without its texture, made for a primitive without `TEXCOORD_0`.
@@ -466,7 +466,7 @@ impl Reader<'_> {
             };
             let corners = triangles(primitive.mode(), &indices);
             let order = |t: [u32; 3]| if mirrored { [t[0], t[2], t[1]] } else { t };
-            let group = ObjGroup {
+            let group = Group {
                 name,
                 material: material_index,
                 triangles: corners.iter().map(|&t| order(t).map(|i| positions[i as usize])).collect(),
@@ -515,7 +515,7 @@ impl Reader<'_> {
             let ke = power * 4.0 / area;
             self.mesh.materials.push(Material::new(&format!("light '{name}'"), Vec3::ZERO, ke));
             let material = self.mesh.materials.len() - 1;
-            self.mesh.groups.push(ObjGroup {
+            self.mesh.groups.push(Group {
                 name: format!("light '{name}'"),
                 material,
                 triangles,

@@ -8,6 +8,7 @@ pub mod camera;
 pub mod file;
 pub mod gltf;
 pub mod kind;
+pub mod material;
 pub mod obj;
 pub mod ray;
 pub mod sky;
@@ -25,7 +26,7 @@ use glam::{Vec2, Vec3};
 
 pub use camera::Camera;
 pub use kind::FileKind;
-pub use obj::Material;
+pub use material::Material;
 pub use ray::Ray;
 pub use sky::SkyMap;
 pub use sun::Sun;
@@ -139,7 +140,7 @@ impl Mesh {
     /// Builds the mesh from groups of triangles, dropping degenerate ones and assigning surface ids.
     /// `warnings` receives what was dropped.
     pub fn new(
-        groups: &[obj::ObjGroup],
+        groups: &[material::Group],
         materials: Vec<Material>,
         textures: Vec<Texture>,
         warnings: &mut Vec<String>,
@@ -531,7 +532,7 @@ impl Scene {
 
 /// The groups and materials of the mesh file at `path`, by its kind (glTF, else OBJ), and a glTF's first
 /// camera and sun.
-fn read_mesh(path: &Path) -> Result<(obj::ObjData, Option<Camera>, Option<Sun>)> {
+fn read_mesh(path: &Path) -> Result<(material::Imported, Option<Camera>, Option<Sun>)> {
     match FileKind::of(path) {
         FileKind::GltfMesh => gltf::load(path).map(|g| (g.mesh, g.camera, g.sun)),
         _ => Ok((obj::load(path)?, None, None)),

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 
-use super::obj::{Material, ObjGroup};
+use super::material::{Group, Material};
 use super::{Surface, SurfaceId, Triangle};
 
 /// Largest angle between the normals of two edge-sharing triangles of one surface.
@@ -39,7 +39,7 @@ pub struct Assigned {
     pub dropped: Dropped,
 }
 
-pub fn assign(groups: &[ObjGroup], materials: &[Material]) -> Assigned {
+pub fn assign(groups: &[Group], materials: &[Material]) -> Assigned {
     let mut triangles = Vec::with_capacity(groups.iter().map(|g| g.triangles.len()).sum());
     let smooth = groups.iter().any(|g| !g.normals.is_empty());
     let mut normals = Vec::with_capacity(if smooth { triangles.capacity() } else { 0 });
@@ -248,7 +248,7 @@ mod tests {
         let o = Vec3::ZERO;
         let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
-        let groups = [ObjGroup { name: "box".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let groups = [Group { name: "box".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!(dropped, Dropped::default());
@@ -268,16 +268,11 @@ mod tests {
         // Through `assign`: only where some group gives normals, and one per kept triangle.
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
-        let flat = [ObjGroup {
-            name: "f".into(),
-            material: 0,
-            triangles: vec![[a, b, c]],
-            normals: Vec::new(),
-            uvs: Vec::new(),
-        }];
+        let flat =
+            [Group { name: "f".into(), material: 0, triangles: vec![[a, b, c]], normals: Vec::new(), uvs: Vec::new() }];
         assert!(assign(&flat, &materials).normals.is_empty());
         let smooth = [
-            ObjGroup {
+            Group {
                 name: "s".into(),
                 material: 0,
                 triangles: vec![[a, b, b], [a, b, c]],
@@ -303,7 +298,7 @@ mod tests {
         // A fin: two coplanar triangles and a third at 90°, all on the edge o–x.
         let (o, x) = (Vec3::ZERO, Vec3::X);
         let triangles = vec![[o, x, Vec3::Z], [x, o, -Vec3::Z], [o, x, Vec3::Y]];
-        let groups = [ObjGroup { name: "fin".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let groups = [Group { name: "fin".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, .. } = assign(&groups, &materials);
         assert_eq!(surfaces.len(), 2);
@@ -312,7 +307,7 @@ mod tests {
 
     #[test]
     fn degenerate_triangles_are_dropped() {
-        let groups = [ObjGroup {
+        let groups = [Group {
             name: "g".into(),
             material: 0,
             triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],

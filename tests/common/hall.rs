@@ -94,8 +94,8 @@ pub fn hall(rings: usize, stacks: usize, size: (u32, u32)) -> Scene {
     ];
     let materials = vec![
         material("stone", 0.6, 0.0),
-        sensorlight::scene::obj::Material::new("red", Vec3::new(0.65, 0.12, 0.1), Vec3::ZERO),
-        sensorlight::scene::obj::Material::new("green", Vec3::new(0.15, 0.5, 0.2), Vec3::ZERO),
+        sensorlight::scene::material::Material::new("red", Vec3::new(0.65, 0.12, 0.1), Vec3::ZERO),
+        sensorlight::scene::material::Material::new("green", Vec3::new(0.15, 0.5, 0.2), Vec3::ZERO),
         material("marble", 0.8, 0.0),
         material("bronze", 0.5, 0.0),
         material("panel", 0.8, 12.0),

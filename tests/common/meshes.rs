@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 use sensorlight::scene::Mesh;
-use sensorlight::scene::obj::{Material, ObjGroup};
+use sensorlight::scene::material::{Group, Material};
 
 /// A closed UV sphere of `2 · slices · (stacks − 1)` triangles, counter-clockwise from outside; each grid
 /// point computed once, so shared corners are equal bit for bit.
@@ -47,21 +47,15 @@ pub fn scene() -> Mesh {
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down
     let groups = [
-        ObjGroup {
+        Group {
             name: "ball".into(),
             material: 0,
             triangles: sphere(Vec3::ZERO, 1.0, 64),
             normals: Vec::new(),
             uvs: Vec::new(),
         },
-        ObjGroup {
-            name: "floor".into(),
-            material: 0,
-            triangles: plane(-1.5, 48),
-            normals: Vec::new(),
-            uvs: Vec::new(),
-        },
-        ObjGroup { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new(), uvs: Vec::new() },
+        Group { name: "floor".into(), material: 0, triangles: plane(-1.5, 48), normals: Vec::new(), uvs: Vec::new() },
+        Group { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new(), uvs: Vec::new() },
     ];
     Mesh::new(&groups, materials, Vec::new(), &mut Vec::new()).unwrap()
 }

@@ -80,7 +80,7 @@ use sensorlight::params::{
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{CacheConfig, Quiet, RenderOutput, Renderer};
 pub use sensorlight::scene::builtin::{lightbox as builtin_lightbox, rect};
-use sensorlight::scene::obj::Material;
+use sensorlight::scene::material::Material;
 use sensorlight::scene::{Camera, ImageSize, Scene};
 use sensorlight::sensors::SensorKind;
 use sensorlight::strategy::StrategyKind;
