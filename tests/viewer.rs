@@ -49,6 +49,18 @@ impl Xvfb {
         panic!("no free X display number in 90..200");
     }
 
+    /// `sensorlight view` of the Cornell box at `size` × `size`, driven by `script`, on this display.
+    fn view(&self, size: u32, script: &Path) -> Command {
+        let size = size.to_string();
+        let mut command = common::command();
+        command
+            .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--script"])
+            .arg(script)
+            .env("DISPLAY", &self.display)
+            .env_remove("WAYLAND_DISPLAY");
+        command
+    }
+
     /// The screen's top-left `SIZE` × `SIZE` pixels as RGB bytes.
     fn top_left(&self) -> Vec<u8> {
         self.pixels(SIZE, SIZE)
@@ -157,13 +169,9 @@ fn the_window_shows_what_render_writes_before_and_after_a_scripted_orbit() {
         format!("wait done\nsync\norbit {YAW_DEG} 0\nwait round 1\nwait done\nsync\nsave {}\nquit\n", saved.display()),
     )
     .unwrap();
-    let size = SIZE.to_string();
-    let mut viewer = common::command()
-        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--timings"])
-        .arg("--script")
-        .arg(&script)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
+    let mut viewer = x
+        .view(SIZE, &script)
+        .arg("--timings")
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -238,14 +246,7 @@ fn a_save_writes_the_picture_shown_when_it_is_asked() {
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     let text = format!("wait done\nsave {}\norbit 30 10\nwait done\nsave {}\nquit\n", a.display(), b.display());
     std::fs::write(&script, text).unwrap();
-    let size = SIZE.to_string();
-    let run = common::command()
-        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--script"])
-        .arg(&script)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
+    let run = x.view(SIZE, &script).output().unwrap();
     assert!(run.status.success(), "{}", common::stderr(&run));
     let expected = render_png(&common::project("scenes/cornell/cornell.toml"), &dir.join("render.exr"));
     assert_eq!(png_rgb(&a.with_extension("png")), expected, "the first save is the scene's own view");
@@ -260,17 +261,8 @@ fn a_window_of_another_shape_shows_the_picture_letterboxed() {
     let script = dir.join("resize.script");
     // Twice as wide as the picture: the swapchain is made anew, the picture centred at 1:1 between bars.
     std::fs::write(&script, format!("wait done\nresize {} {SIZE}\nsync\nquit\n", 2 * SIZE)).unwrap();
-    let size = SIZE.to_string();
-    let mut viewer = common::command()
-        .args(["view", "scenes/cornell/cornell.toml", "--width", &size, "--height", &size, "--script"])
-        .arg(&script)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut viewer =
+        x.view(SIZE, &script).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
     let line = lines.next().and_then(Result::ok).unwrap_or_default();
     assert!(line.starts_with("sync 1"), "{line}");
@@ -312,16 +304,8 @@ fn ctrl_c_stops_the_viewer_as_it_stops_a_render() {
     let x = Xvfb::start();
     let script = dir.join("interrupt.script");
     std::fs::write(&script, "wait round 1\nsync\nwait done\nquit\n").unwrap();
-    let mut viewer = common::command()
-        .args(["view", "scenes/cornell/cornell.toml", "--width", "64", "--height", "64", "--script"])
-        .arg(&script)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut viewer =
+        x.view(64, &script).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
     let line = lines.next().and_then(Result::ok).unwrap_or_default();
     assert!(line.starts_with("sync 1"), "{line}");
@@ -343,13 +327,7 @@ fn quitting_mid_render_ends_cleanly() {
     let script = dir.join("quit.script");
     // Quit as soon as the first round is shown: the render stops between batches, nothing is left behind.
     std::fs::write(&script, "wait round 1\nquit\n").unwrap();
-    let run = common::command()
-        .args(["view", "scenes/cornell/cornell.toml", "--width", "64", "--height", "64", "--script"])
-        .arg(&script)
-        .env("DISPLAY", &x.display)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
+    let run = x.view(64, &script).output().unwrap();
     let stderr = common::stderr(&run);
     // Exit code 3 would be the validation layer's messages (objects left, a semaphore still in use, …).
     assert_eq!(run.status.code(), Some(0), "{stderr}");
