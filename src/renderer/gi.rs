@@ -20,10 +20,11 @@ use crate::gi::reach::Reach;
 use crate::gi::solve::{Next, Solver};
 use crate::gi::transport::{self, Transport};
 use crate::gpu_scene::GpuCache;
-use crate::params::Bounces;
+use crate::params::{Bounces, FrameParams};
 use crate::passes::sensor_maps::{Background, CacheRead, CkParams};
 use crate::scene::ImageSize;
-use crate::sensors::weights;
+use crate::sensors::hints::{self, LightPoint};
+use crate::sensors::{frame, weights};
 use crate::vk::{Device, transfer};
 
 /// A bounce done: for progress displays.
@@ -402,4 +403,48 @@ pub(super) fn solve(
         tail_share: solver.tail_share(),
         seconds: (first_seconds, start.elapsed().as_secs_f64() - first_seconds),
     })
+}
+
+impl super::Renderer {
+    /// Senses the radiance cache's bounces for `frame`'s global illumination, leaving the cache for the
+    /// sensor maps that follow ([`Renderer::render`] does this itself; [`Renderer::sense_at`] then sees it).
+    /// An error if the renderer was built without a cache.
+    pub fn solve_cache(&mut self, frame: &FrameParams, progress: &dyn Progress) -> Result<Option<GiStats>> {
+        self.cache_solved = false;
+        let Some(bounces) = frame.indirect.bounces() else { return Ok(None) };
+        let background = self.background(frame);
+        let (cache, later) = self.cache.as_mut().context(
+            "this renderer was built without a radiance cache (RendererBuilder::radiance_cache): it renders the \
+             paper's ε only",
+        )?;
+        // Only the entries light reaches are sensed: the walk starts at the emitters' entries, and where
+        // rays that leave the scene carry light, at the entries that see out.
+        let distant_lights = self.host.mesh.local_triangles().len() < self.host.mesh.triangles.len();
+        let sky = !background.is_black() || distant_lights;
+        let bias = frame::BIAS * self.scale;
+        let seeds = crate::gi::reach::seeds(cache, &self.host.mesh, &self.bvh, sky, bias);
+        let runners = Runners { first: &mut self.runner, later };
+        let budget = self.config.cache.map_or(crate::gi::transport::DEFAULT_BUDGET, |c| c.transport_budget);
+        let light = (bounces, background, budget);
+        // Where the light hints have points on the lights, an uneven piece's direct light is measured by
+        // shadow rays from the points spread over it rather than by sensors there.
+        let (lights, bvh, near) = (&self.scene.lights, &self.bvh, frame::NEAR * self.scale);
+        let bits = hints::group_bits(lights);
+        let bits = &bits;
+        let direct = |points: &[LightPoint], p: Vec3, n: Vec3| -> Vec3 {
+            let (facing, seen) = hints::masks(bvh, points, (p, n), bias, near);
+            let e = lights.unoccluded(p + n * bias, n);
+            let share = |g: u64| match (facing & g).count_ones() {
+                0 => 1.0,
+                f => (seen & g).count_ones() as f32 / f as f32,
+            };
+            bits.iter().zip(e).map(|(&g, e)| e * share(g)).sum::<Vec3>() / std::f32::consts::PI
+        };
+        let points = self.light_points.as_deref().filter(|_| self.direct_by_rays);
+        let rays = points.map(|points| move |p: Vec3, n: Vec3| direct(points, p, n));
+        let rays = rays.as_ref().map(|f| f as DirectByRays<'_>);
+        let stats = solve(&self.device, runners, (cache, &self.scene.cache, seeds), light, rays, progress)?;
+        self.cache_solved = true;
+        Ok(Some(stats))
+    }
 }

@@ -5,7 +5,8 @@
 use anyhow::Result;
 use glam::{Vec3, Vec4};
 
-use super::{Renderer, Targets, map_buffer};
+use super::Renderer;
+use super::targets::{Targets, map_buffer};
 use crate::gbuffer::GBufferData;
 use crate::gbuffer::cast::Visible;
 use crate::passes::resolve::ResolveTargets;

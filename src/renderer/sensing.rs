@@ -1,0 +1,151 @@
+//! A render's sensing (paper §III-G): sensors on the grid, then rounds of refinement until no quad asks for
+//! more, each round's sensors in batches on the GPU. The host keeps R only where it sensed: that is all the
+//! refinement reads. Before the first round, the light hints (which points on the lights each pixel sees)
+//! and which pixels take sub-pixel samples (docs/DESIGN.md §11).
+
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use glam::{Vec3, Vec4};
+
+use super::batch::Sensed;
+use super::preview::{PreviewLight, preview};
+use super::targets::Targets;
+use super::{Progress, Renderer, RoundDone, Snapshot};
+use crate::gbuffer::GBufferData;
+use crate::gpu_types::MAX_GROUPS;
+use crate::params::{Antialiasing, FrameParams};
+use crate::sensors::SensorKind;
+use crate::sensors::hints;
+use crate::sensors::refine::{Refinement, Visibility};
+use crate::supersample;
+use crate::vk::transfer;
+
+/// What the post passes need of the rounds (R itself is in the targets' maps).
+pub(super) struct Rounds {
+    /// With the exact estimator: each light group's visibility at every pixel sensed (−1 elsewhere).
+    pub(super) visibility: Vec<Visibility>,
+    /// Where sensors went, and the quads interpolated.
+    pub(super) refinement: Refinement,
+    /// Whether each light group's unoccluded light is computed per pixel and only the visibilities and the
+    /// rest of R interpolated (`interpolate_exact.comp`).
+    pub(super) exact_interpolation: bool,
+    /// Each light group's hint bits.
+    pub(super) bits: Vec<u64>,
+    /// The pixels that take sub-pixel samples, and what their samples see.
+    pub(super) plan: supersample::Plan,
+    /// Sensors, and bytes read back, per round.
+    pub(super) per_round: Vec<u64>,
+    pub(super) readback_per_round: Vec<u64>,
+    /// The host's time on the light hints and the refinement's steps; on the supersampling plan.
+    pub(super) refine_time: Duration,
+    pub(super) supersample_time: Duration,
+}
+
+impl Renderer {
+    /// Senses the image of G-buffer `g` into `targets`' maps, round by round; previews and progress through
+    /// `progress`, which may stop it between batches. `sky`: the sky each pixel shows, under a sky map.
+    pub(super) fn sense_rounds(
+        &mut self,
+        g: &GBufferData,
+        targets: &Targets,
+        frame: &FrameParams,
+        sky: Option<&[Vec3]>,
+        progress: &dyn Progress,
+    ) -> Result<Rounds> {
+        let pixels = g.size.width as usize * g.size.height as usize;
+        let ck = self.ck(frame);
+        let (refinement, mut pending) = Refinement::start(g, frame.tile, frame.dradiance);
+        let t = Instant::now();
+        let (bias, near) = self.offsets();
+        let masks = self.light_points.as_ref().map(|points| hints::hints(&self.bvh, points, g, bias, near));
+        if let Some(masks) = &masks {
+            transfer::write_buffer(&self.device, &targets.light_masks, masks)?;
+        }
+        let hint_time = t.elapsed();
+        // Which pixels take sub-pixel samples, and what the samples see (docs/DESIGN.md §11).
+        let t = Instant::now();
+        let bits = self.light_points.as_ref().map(|_| hints::group_bits(&self.scene.lights)).unwrap_or_default();
+        let plan = match frame.aa {
+            Antialiasing::On => {
+                let flags = supersample::detect(&self.host, g, masks.as_deref().unwrap_or(&[]), &bits);
+                supersample::plan(&self.host, &self.bvh, g, &flags)
+            }
+            Antialiasing::Off => supersample::Plan::default(),
+        };
+        let supersample_time = t.elapsed();
+        let mut refinement = match masks {
+            Some(masks) => refinement.with_hints(masks),
+            None => refinement,
+        };
+        let mut r = vec![Vec4::ZERO; pixels];
+        let exact = self.runner.measures_lights();
+        let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
+        // With the exact estimator over the hemisphere (a domain the same whatever a sensor's turn), the
+        // interpolation computes each light group's unoccluded light per pixel and interpolates only the
+        // visibilities and the rest of R (`interpolate_exact.comp`), so the refinement judges those. A pixel
+        // loops over every emitter there, so only up to one emitter chunk's worth: with thousands of emissive
+        // triangles that loop would cost more per pixel than a sensor's emitter pass (docs/ACCURACY.md).
+        let few_emitters = self.scene.lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
+        let exact_interpolation = exact && self.config.sensor == SensorKind::Hemicube && few_emitters;
+        let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
+        let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
+        let mut refine_time = hint_time;
+        loop {
+            if !pending.is_empty() {
+                progress.queued(pending.len() as u64);
+                let read_before = self.runner.times.readback_bytes;
+                let mut deliver = |b: &Sensed<'_>| {
+                    for (&i, f) in b.pixels.iter().zip(b.results) {
+                        r[i as usize] = f.r;
+                        if exact {
+                            visibility[i as usize] = f.visibility;
+                        }
+                        if exact_interpolation {
+                            rest[i as usize] = f.rest;
+                        }
+                    }
+                    progress.done(b.pixels.len() as u64);
+                };
+                self.runner.sense_or_stop(g, &pending, ck, &mut deliver, &|| progress.cancelled())?;
+                self.runner.drain(&mut deliver)?;
+                per_round.push(pending.len() as u64);
+                readback_per_round.push(self.runner.times.readback_bytes - read_before);
+                let round = per_round.len() as u32;
+                if progress.wants_snapshot(round) {
+                    let light = exact_interpolation.then(|| PreviewLight {
+                        visibility: &visibility,
+                        rest: &rest,
+                        lights: &self.scene.lights,
+                        bias,
+                    });
+                    let image = preview(g, &r, &refinement, (frame.background, sky), light);
+                    progress.snapshot(&Snapshot { round, size: g.size, image });
+                }
+            }
+            if refinement.is_finished() {
+                break;
+            }
+            let t = Instant::now();
+            pending = refinement.step(&r, &visibility, &rest);
+            refine_time += t.elapsed();
+            progress.round(&RoundDone {
+                round: per_round.len() as u32,
+                sensors: per_round.last().copied().unwrap_or(0),
+                resolved_pixels: pixels as u64 - refinement.unresolved_pixels(),
+                pixels: pixels as u64,
+            });
+        }
+        Ok(Rounds {
+            visibility,
+            refinement,
+            exact_interpolation,
+            bits,
+            plan,
+            per_round,
+            readback_per_round,
+            refine_time,
+            supersample_time,
+        })
+    }
+}
