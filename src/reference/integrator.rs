@@ -169,10 +169,11 @@ impl<'a> Integrator<'a> {
             SensorKind::Frustum { fov_deg } => Some((fov_deg.to_radians() * 0.5).tan()),
             SensorKind::Hemicube => None,
         };
+        let (bias, near) = frame::offsets(scene.mesh.scale());
         Ok(Self {
             bvh: Bvh::of_mesh(&scene.mesh),
-            bias: frame::BIAS * scene.mesh.scale(),
-            near: frame::NEAR * scene.mesh.scale(),
+            bias,
+            near,
             scene,
             params,
             samples,

@@ -277,11 +277,6 @@ impl BatchRunner {
         self.culling.is_some()
     }
 
-    /// Whether the sensors measure light groups' visibilities (the exact estimator, a scene with lights).
-    pub fn measures_lights(&self) -> bool {
-        self.emitters.is_some()
-    }
-
     pub fn in_flight(&self) -> u32 {
         self.slots.len() as u32
     }

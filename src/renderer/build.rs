@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::batch::BatchRunner;
 use super::checks::{check_cache_size, check_size, check_textures};
 use super::config::{CacheConfig, DEFAULT_IN_FLIGHT, Detail, RendererConfig, default_memory_budget};
+use super::estimate::Estimate;
 use super::{Renderer, detail, probe};
 use crate::gi::RadianceCache;
 use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
@@ -26,7 +27,6 @@ use crate::passes::sensor_maps::{EmitterFronts, StrategyDesc, TEXEL_BYTES};
 use crate::scene::Scene;
 use crate::scene::bvh::Bvh;
 use crate::sensors::SensorKind;
-use crate::sensors::frame;
 use crate::sensors::hints;
 use crate::sensors::layout::SensorLayout;
 use crate::strategy::{self, Cache, Choice, StrategyKind, StrategyRequest};
@@ -210,28 +210,26 @@ impl Renderer {
         let hierarchy = cluster_hierarchy(device, scene, config.detail);
         let lights = Lights::new(&scene.mesh);
         let layout = config.layout(&lights);
-        let (bias, near) = (frame::BIAS * scale, frame::NEAR * scale);
+        let estimate = Estimate::new(&config, &lights, scale);
+        let (bias, near) = estimate.offsets;
         // The scene's triangles and points on its lights: the refinement's light hints, and where the radiance
         // cache's pieces are halved.
         let bvh = Bvh::of_mesh(&scene.mesh);
-        let mut light_points = (layout.groups > 0).then(|| hints::light_points(&lights));
+        let mut light_points = (estimate.groups > 0).then(|| hints::light_points(&lights));
         // A sky map's bright patches too: its shadows split quads as the lights' do (the shares, by group,
         // ignore these points).
         if let Some(sky) = &scene.sky {
             let points = light_points.get_or_insert_with(Vec::new);
             points.extend(hints::sky_points(sky, &scene.mesh.bounds, points.len()));
         }
-        let shadow_points = (layout.groups > 0).then(|| ShadowPoints::new(&lights));
-        // The cache's direct light by shadow rays and the closed form, where the closed form is cheap (as for
-        // the exact interpolation).
-        let direct_by_rays = layout.groups > 0 && lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
+        let shadow_points = (estimate.groups > 0).then(|| ShadowPoints::new(&lights));
         if let Some(c) = config.cache {
             check_cache_size(device, RadianceCache::bytes_at_least(&scene.mesh, c.resolution), c.resolution)?;
         }
         let cache = config.cache.map(|c| {
             let lod = hierarchy.as_ref().map(lod_triangles).unwrap_or_default();
             // The lights' irradiance in closed form where it is cheap (as for the exact interpolation).
-            let few = lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
+            let few = estimate.few_emitters;
             let irradiance = |p: Vec3, n: Vec3| lights.unoccluded(p + n * bias, n).iter().map(|&e| luminance(e)).sum();
             let varies = |points: &[Vec3], n: Vec3| {
                 let Some(hinted) = &light_points else { return false };
@@ -278,7 +276,7 @@ impl Renderer {
                 let runner = BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?;
                 // The radiance cache's first bounce reads the transport's rows from the render's maps where
                 // no shadow rays give its direct light (`gi::solve`).
-                if cache.is_some() && !direct_by_rays { runner.with_rows()? } else { runner }
+                if cache.is_some() && !estimate.direct_by_rays { runner.with_rows()? } else { runner }
             },
             interpolate: InterpolatePass::new(device)?,
             filter: FilterPass::new(device)?,
@@ -287,7 +285,7 @@ impl Renderer {
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
             scene: gpu_scene,
             cache,
-            direct_by_rays,
+            estimate,
             camera: scene.camera,
             scale,
             config,

@@ -24,7 +24,7 @@ use crate::params::{Bounces, FrameParams};
 use crate::passes::sensor_maps::{Background, CacheRead, CkParams};
 use crate::scene::ImageSize;
 use crate::sensors::hints::{self, LightPoint};
-use crate::sensors::{frame, weights};
+use crate::sensors::weights;
 use crate::vk::{Device, transfer};
 
 /// A bounce done: for progress displays.
@@ -421,14 +421,14 @@ impl super::Renderer {
         // rays that leave the scene carry light, at the entries that see out.
         let distant_lights = self.host.mesh.local_triangles().len() < self.host.mesh.triangles.len();
         let sky = !background.is_black() || distant_lights;
-        let bias = frame::BIAS * self.scale;
+        let (bias, near) = self.estimate.offsets;
         let seeds = crate::gi::reach::seeds(cache, &self.host.mesh, &self.bvh, sky, bias);
         let runners = Runners { first: &mut self.runner, later };
         let budget = self.config.cache.map_or(crate::gi::transport::DEFAULT_BUDGET, |c| c.transport_budget);
         let light = (bounces, background, budget);
         // Where the light hints have points on the lights, an uneven piece's direct light is measured by
         // shadow rays from the points spread over it rather than by sensors there.
-        let (lights, bvh, near) = (&self.scene.lights, &self.bvh, frame::NEAR * self.scale);
+        let (lights, bvh) = (&self.scene.lights, &self.bvh);
         let bits = hints::group_bits(lights);
         let bits = &bits;
         let direct = |points: &[LightPoint], p: Vec3, n: Vec3| -> Vec3 {
@@ -440,7 +440,7 @@ impl super::Renderer {
             };
             bits.iter().zip(e).map(|(&g, e)| e * share(g)).sum::<Vec3>() / std::f32::consts::PI
         };
-        let points = self.light_points.as_deref().filter(|_| self.direct_by_rays);
+        let points = self.light_points.as_deref().filter(|_| self.estimate.direct_by_rays);
         let rays = points.map(|points| move |p: Vec3, n: Vec3| direct(points, p, n));
         let rays = rays.as_ref().map(|f| f as DirectByRays<'_>);
         let stats = solve(&self.device, runners, (cache, &self.scene.cache, seeds), light, rays, progress)?;

@@ -12,6 +12,7 @@ mod build;
 mod checks;
 mod config;
 pub mod detail;
+mod estimate;
 mod gi;
 mod post;
 mod preview;
@@ -53,7 +54,6 @@ use crate::passes::resolve::ResolvePass;
 use crate::passes::sensor_maps::{Background, CacheRead, CkParams};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Camera, ImageSize, Scene};
-use crate::sensors::frame;
 use crate::sensors::hints::LightPoint;
 use crate::strategy::{Choice, StrategyKind};
 use crate::supersample::ShadowPoints;
@@ -80,9 +80,8 @@ pub struct Renderer {
     /// The radiance cache's points and table, and the runner of its rows and later bounces (with
     /// `config.cache`).
     cache: Option<(RadianceCache, BatchRunner)>,
-    /// Whether the cache's direct light is measured by shadow rays (`gi::DirectByRays`): light groups of at
-    /// most one emitter chunk; else by the render's sensors.
-    direct_by_rays: bool,
+    /// How R is estimated: light groups, the exact interpolation, the cache's direct light, the offsets.
+    estimate: estimate::Estimate,
     camera: Camera,
     /// The scene's diagonal: sensor offsets and near planes are fractions of it.
     scale: f32,
@@ -280,6 +279,6 @@ impl Renderer {
 
     /// The sensors' lift off their surface and their near plane: fractions of the scene's size.
     fn offsets(&self) -> (f32, f32) {
-        (frame::BIAS * self.scale, frame::NEAR * self.scale)
+        self.estimate.offsets
     }
 }

@@ -68,7 +68,7 @@ impl Renderer {
         // The indirect part apart: with global illumination and the exact estimator (whose main layers hold
         // only it), where its radius is R's own it is not (R's filter already does it).
         let apart =
-            global_illumination && self.runner.measures_lights() && frame.indirect_filter_radius != frame.filter_radius;
+            global_illumination && self.estimate.groups > 0 && frame.indirect_filter_radius != frame.filter_radius;
         self.filter.bind(&device, 0, (&sensed.radiance, &t.filtered), ids, masks);
         self.filter.bind(&device, 1, (&sensed.indirect, &t.indirect_at_r), ids, masks);
         self.filter.bind(&device, 2, (&sensed.indirect, &t.indirect_own), ids, masks);

@@ -15,7 +15,6 @@ use super::{Progress, Renderer, RoundDone, Snapshot};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::MAX_GROUPS;
 use crate::params::{Antialiasing, FrameParams};
-use crate::sensors::SensorKind;
 use crate::sensors::hints;
 use crate::sensors::refine::{Refinement, Visibility};
 use crate::supersample;
@@ -79,15 +78,9 @@ impl Renderer {
             None => refinement,
         };
         let mut r = vec![Vec4::ZERO; pixels];
-        let exact = self.runner.measures_lights();
+        let exact = self.estimate.groups > 0;
         let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
-        // With the exact estimator over the hemisphere (a domain the same whatever a sensor's turn), the
-        // interpolation computes each light group's unoccluded light per pixel and interpolates only the
-        // visibilities and the rest of R (`interpolate_exact.comp`), so the refinement judges those. A pixel
-        // loops over every emitter there, so only up to one emitter chunk's worth: with thousands of emissive
-        // triangles that loop would cost more per pixel than a sensor's emitter pass (docs/ACCURACY.md).
-        let few_emitters = self.scene.lights.emitters.len() <= crate::gpu_types::EMITTER_CHUNK as usize;
-        let exact_interpolation = exact && self.config.sensor == SensorKind::Hemicube && few_emitters;
+        let exact_interpolation = self.estimate.exact_interpolation;
         let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
         let (mut per_round, mut readback_per_round) = (Vec::new(), Vec::new());
         let mut refine_time = hint_time;

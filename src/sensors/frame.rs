@@ -14,6 +14,12 @@ use crate::scene::camera::{projection, view_matrix};
 pub const BIAS: f32 = 2e-4;
 pub const NEAR: f32 = 1e-4;
 
+/// [`BIAS`] and [`NEAR`] for a scene of diagonal `scale`: the sensors' lift and near plane in its units,
+/// as the renderer, the light hints, the supersampling and the CPU oracle all use them.
+pub fn offsets(scale: f32) -> (f32, f32) {
+    (BIAS * scale, NEAR * scale)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorFrame {
     pub origin: Vec3,

@@ -179,9 +179,9 @@ mod tests {
             emission: vec![glam::Vec4::ZERO; 3],
             surface: vec![1; 3],
         };
-        let scale = scene.mesh.scale();
+        let (bias, near) = frame::offsets(scene.mesh.scale());
         let bvh = Bvh::of_mesh(&scene.mesh);
-        let masks = hints(&bvh, &points, &g, frame::BIAS * scale, frame::NEAR * scale);
+        let masks = hints(&bvh, &points, &g, bias, near);
         let all = (1u64 << points.len()) - 1;
         assert_eq!(masks[0], all, "in the open, every point is seen");
         assert!(masks[1] != all && masks[1] != 0, "in the penumbra, the block hides part of the light: {:b}", masks[1]);

@@ -150,7 +150,7 @@ mod tests {
         let lights = Lights::new(&scene.mesh);
         let bvh = Bvh::of_mesh(&scene.mesh);
         let scale = scene.mesh.scale();
-        let offsets = (frame::BIAS * scale, frame::NEAR * scale);
+        let offsets = frame::offsets(scale);
         let points = ShadowPoints::new(&lights);
         let at = |x: f32, z: f32, k: usize| points.visibility(&bvh, (Vec3::new(x, 0.0, z), Vec3::Y), offsets, 1, k)[0];
         assert_eq!(at(-0.6, 0.5, 0), 1.0, "in the open");
