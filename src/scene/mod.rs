@@ -795,7 +795,7 @@ impl Scene {
         }
         let body = toml::to_string(&doc).context("scene to TOML")?;
         Ok(format!(
-            "# A scene for {}, written by sensorlight: edit freely (see README.md, Scenes).\n{body}",
+            "# A scene for {}, written by sensorlight: edit freely (see docs/USAGE.md, Scenes).\n{body}",
             self.path.display()
         ))
     }
