@@ -19,7 +19,7 @@ repeat=${REPEAT:-3}
 mkdir -p "$out"
 export SENSORLIGHT_CACHE_DIR="$out/cache"
 
-echo "| scene | direct only (s) | global illumination (s) | ratio | cache: first bounce + others (s) | entries × bounces | cache KiB |"
+echo "| scene | direct only (s) | global illumination (s) | ratio | cache: first bounce + others (s) | entries reached / all, bounces | cache KiB |"
 echo "|---|---|---|---|---|---|---|"
 for scene in "${scenes[@]}"; do
     name=$(basename "$scene" .toml)
@@ -42,6 +42,6 @@ first = median(gi, lambda r: r["times"]["cache_direct_seconds"])
 later = median(gi, lambda r: r["times"]["cache_bounces_seconds"])
 c = gi[0]["gi"]
 print(f"| {name} {gi[0]['width']}×{gi[0]['height']} | {d:.2f} | {g:.2f} | {g / d:.1f}× | {first:.2f} + {later:.2f} | "
-      f"{c['entries']} × {c['bounces']} | {c['cache_bytes'] / 1024:.0f} |")
+      f"{c['reached']} / {c['entries']}, {c['bounces']} | {c['cache_bytes'] / 1024:.0f} |")
 PY
 done
