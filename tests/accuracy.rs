@@ -1,6 +1,6 @@
 //! The exact estimator against the oracle on the hard cases (docs/DESIGN.md §6): every pixel sensed at its
 //! centre, hemicube rd 64, no filter, ε = 0 (direct light), per-pixel relative RMSE on lit pixels with
-//! silhouettes masked, the oracle's own noise taken out (`output::compare`). Each must be within 1 %. The
+//! silhouettes masked, the oracle's own noise taken out (`metrics::compare`). Each must be within 1 %. The
 //! renders at the defaults take pixels as their squares (`--aa on`), and so does their oracle.
 
 mod common;
@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 
 use glam::Vec4;
-use sensorlight::output::compare::{Agreement, Picture, agreement};
+use sensorlight::metrics::compare::{Agreement, Picture, agreement};
 use sensorlight::params::{EstimatorKind, Indirect};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{Quiet, Renderer};

@@ -8,7 +8,7 @@ use glam::{Vec3, Vec4};
 use sensorlight::clusters;
 use sensorlight::gpu_scene::gpu_clusters;
 use sensorlight::light::groups::Lights;
-use sensorlight::output::compare::{Picture, agreement};
+use sensorlight::metrics::compare::{Picture, agreement};
 use sensorlight::params::EstimatorKind;
 use sensorlight::passes::cull::keeps;
 use sensorlight::renderer::{Detail, Quiet, Renderer, probe_pixels};

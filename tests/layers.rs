@@ -148,3 +148,34 @@ fn the_scanner_sees_grouped_and_nested_paths() {
     let found: Vec<String> = crate_paths(text).into_iter().collect();
     assert_eq!(found, ["passes", "scene", "vk"]);
 }
+
+/// docs/DESIGN.md §8's table says what each module may use: the same as the rules above, so that the
+/// document a newcomer reads is the rule the tests enforce (issue 40, item 7: it had left out `shaders`).
+#[test]
+fn the_design_documents_the_same_layer_rules() {
+    let design = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/DESIGN.md")).unwrap();
+    let start = design.find("## 8. ").expect("docs/DESIGN.md has a §8");
+    let section = &design[start..start + design[start..].find("\n## 9.").unwrap_or(design.len() - start)];
+    // Rows `| layer | `module`, `module` | what | may use |`.
+    let rows: Vec<Vec<&str>> = section
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| layer") && !l.starts_with("|---"))
+        .map(|l| l.trim_matches('|').split(" | ").map(str::trim).collect())
+        .collect();
+    let names = |cell: &str| -> BTreeSet<String> {
+        cell.split('`').skip(1).step_by(2).filter(|w| !w.contains('/')).map(str::to_owned).collect()
+    };
+    for (module, allowed) in RULES {
+        let row = rows.iter().find(|r| r.len() == 4 && names(r[1]).contains(*module));
+        let Some(row) = row else { panic!("docs/DESIGN.md §8 has no row for `{module}`") };
+        let documented: BTreeSet<String> = match row[3] {
+            "—" => BTreeSet::new(),
+            cell => cell.split(", ").map(|w| w.trim_matches('`').to_owned()).collect(),
+        };
+        let rule: BTreeSet<String> = allowed.iter().map(|s| s.to_string()).collect();
+        assert_eq!(
+            documented, rule,
+            "docs/DESIGN.md §8 says `{module}` may use {documented:?}; tests/layers.rs {rule:?}"
+        );
+    }
+}

@@ -5,8 +5,9 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
+use sensorlight::metrics::compare::compare_files;
 use sensorlight::outln;
-use sensorlight::output::{atomic, compare::compare_files};
+use sensorlight::output::atomic;
 
 #[derive(Args)]
 #[command(after_help = "The headline is the per-pixel relative RMSE of luminance over the lit pixels of the \

@@ -39,7 +39,7 @@ use std::path::Path;
 
 use anyhow::{Context as _, Result, bail, ensure};
 
-use super::exr;
+use crate::output::exr;
 
 /// A pixel is lit where the reference's luminance exceeds this fraction of its mean luminance.
 pub const LIT_FRACTION: f64 = 0.01;

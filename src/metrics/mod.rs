@@ -5,8 +5,10 @@
 //! - **Fig. 11**: number of sensors against sensor map size, for the same resolutions.
 //!
 //! Figures 10 and 11 come from the same renders. One [`Renderer`] serves every render of a map size, so
-//! pipeline creation is not counted; each render's own time (G-buffer to composition) is.
+//! pipeline creation is not counted; each render's own time (G-buffer to composition) is. [`compare`]
+//! measures an image's error against a reference's (`sensorlight compare`, docs/ACCURACY.md).
 
+pub mod compare;
 pub mod report;
 
 use std::sync::Arc;

@@ -2,7 +2,6 @@
 //! standard output.
 
 pub mod atomic;
-pub mod compare;
 pub mod exr;
 pub mod plot;
 pub mod png;

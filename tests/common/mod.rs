@@ -73,7 +73,7 @@ pub fn project(path: &str) -> PathBuf {
 }
 
 use glam::{Vec3, Vec4};
-use sensorlight::output::compare::{Comparison, Picture, compare};
+use sensorlight::metrics::compare::{Comparison, Picture, compare};
 use sensorlight::params::{
     Antialiasing, EstimatorKind, EstimatorParams, FrameParams, Indirect, Overrides, RenderParams,
 };
