@@ -12,7 +12,7 @@ use super::batch::BatchRunner;
 use super::checks::{check_cache_size, check_size, check_textures};
 use super::config::{CacheConfig, DEFAULT_IN_FLIGHT, Detail, RendererConfig, default_memory_budget};
 use super::estimate::Estimate;
-use super::{Renderer, detail, probe};
+use super::{PostPasses, Renderer, detail, probe};
 use crate::gi::RadianceCache;
 use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
 use crate::gpu_scene::GpuScene;
@@ -278,10 +278,12 @@ impl Renderer {
                 // no shadow rays give its direct light (`gi::solve`).
                 if cache.is_some() && !estimate.direct_by_rays { runner.with_rows()? } else { runner }
             },
-            interpolate: InterpolatePass::new(device)?,
-            filter: FilterPass::new(device)?,
-            compose: ComposePass::new(device)?,
-            resolve: ResolvePass::new(device)?,
+            passes: PostPasses {
+                interpolate: InterpolatePass::new(device)?,
+                filter: FilterPass::new(device)?,
+                compose: ComposePass::new(device)?,
+                resolve: ResolvePass::new(device)?,
+            },
             gbuffer: GBufferPass::new(device, &gpu_scene)?,
             scene: gpu_scene,
             cache,

@@ -71,10 +71,8 @@ pub struct Renderer {
     light_points: Option<Vec<LightPoint>>,
     /// Points on the lights that supersampled samples cast shadow rays at (with `light_points`).
     shadow_points: Option<ShadowPoints>,
-    interpolate: InterpolatePass,
-    filter: FilterPass,
-    compose: ComposePass,
-    resolve: ResolvePass,
+    /// The passes after the sensing: interpolation, filter, composition, the supersampled pixels' resolve.
+    passes: PostPasses,
     gbuffer: GBufferPass,
     scene: GpuScene,
     /// The radiance cache's points and table, and the runner of its rows and later bounces (with
@@ -98,6 +96,14 @@ pub struct Renderer {
     /// (indirect model and background) and what solving it found.
     kept: Option<Option<(Indirect, Vec3, GiStats)>>,
     device: Arc<Device>,
+}
+
+/// The compute passes a render runs after its sensing (`post.rs`, `resolve.rs`).
+struct PostPasses {
+    interpolate: InterpolatePass,
+    filter: FilterPass,
+    compose: ComposePass,
+    resolve: ResolvePass,
 }
 
 /// What a render produced.
@@ -254,7 +260,7 @@ impl Renderer {
             supersampled_pixels: post.supersampled.len() as u64,
             gi,
         };
-        let stats = RenderStats::new(&self.device, self, size, frame, counts, start.elapsed(), times);
+        let stats = RenderStats::new(&self.device, self.engine(), size, frame, counts, start.elapsed(), times);
         let Post { image, radiance, gbuffer, mut supersampled, .. } = post;
         supersampled.sort_unstable();
         Ok(RenderOutput { size, image, radiance, gbuffer, supersampled, stats })
@@ -275,6 +281,20 @@ impl Renderer {
             *kept = Some((frame.indirect, frame.background, stats.clone()));
         }
         Ok(gi)
+    }
+
+    /// What the statistics say of this renderer.
+    fn engine(&self) -> stats::Engine {
+        stats::Engine {
+            sensor: self.config.sensor,
+            sensor_size: self.config.sensor_size,
+            strategy: self.strategy(),
+            batch_size: self.batch_size(),
+            in_flight: self.runner.in_flight(),
+            culled: self.culled(),
+            build: self.build_time(),
+            batches: self.runner.times,
+        }
     }
 
     /// The sensors' lift off their surface and their near plane: fractions of the scene's size.

@@ -63,16 +63,16 @@ impl Renderer {
             scene: &self.scene,
             bias,
         });
-        self.interpolate.bind(&device, quads, [&sensed.radiance, &sensed.indirect], exact_light)?;
+        self.passes.interpolate.bind(&device, quads, [&sensed.radiance, &sensed.indirect], exact_light)?;
         let (ids, masks) = (&t.gbuffer.surface, &t.light_masks);
         // The indirect part apart: with global illumination and the exact estimator (whose main layers hold
         // only it), where its radius is R's own it is not (R's filter already does it).
         let apart =
             global_illumination && self.estimate.groups > 0 && frame.indirect_filter_radius != frame.filter_radius;
-        self.filter.bind(&device, 0, (&sensed.radiance, &t.filtered), ids, masks);
-        self.filter.bind(&device, 1, (&sensed.indirect, &t.indirect_at_r), ids, masks);
-        self.filter.bind(&device, 2, (&sensed.indirect, &t.indirect_own), ids, masks);
-        self.compose.bind(
+        self.passes.filter.bind(&device, 0, (&sensed.radiance, &t.filtered), ids, masks);
+        self.passes.filter.bind(&device, 1, (&sensed.indirect, &t.indirect_at_r), ids, masks);
+        self.passes.filter.bind(&device, 2, (&sensed.indirect, &t.indirect_own), ids, masks);
+        self.passes.compose.bind(
             &device,
             [&t.filtered, &t.indirect_at_r, &t.indirect_own],
             [&t.image, &t.composed],
@@ -81,15 +81,15 @@ impl Renderer {
         );
         device.submit_and_wait(|enc| {
             barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
-            self.interpolate.record(enc, size);
+            self.passes.interpolate.record(enc, size);
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.filter.record(enc, 0, size, frame.filter_radius);
+            self.passes.filter.record(enc, 0, size, frame.filter_radius);
             if apart {
-                self.filter.record(enc, 1, size, frame.filter_radius);
-                self.filter.record(enc, 2, size, frame.indirect_filter_radius);
+                self.passes.filter.record(enc, 1, size, frame.filter_radius);
+                self.passes.filter.record(enc, 2, size, frame.indirect_filter_radius);
             }
             barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite]);
-            self.compose.record(enc, size, apart, (!sky_map).then_some(frame.background));
+            self.passes.compose.record(enc, size, apart, (!sky_map).then_some(frame.background));
             Ok(())
         })?;
         // The supersampled pixels, a slice at a time: their samples' R from their donors, the mean over each.

@@ -65,10 +65,10 @@ impl Renderer {
                 scene: &self.scene,
             };
             let exact = light.is_some();
-            self.resolve.bind(&device, (&plan.gpu_pixels(range.clone()), &samples), t, (exact, bias))?;
+            self.passes.resolve.bind(&device, (&plan.gpu_pixels(range.clone()), &samples), t, (exact, bias))?;
             device.submit_and_wait(|enc| {
                 barrier::global(enc, &[Access::ComputeWrite, Access::TransferWrite], &[Access::ComputeWrite]);
-                self.resolve.record(enc);
+                self.passes.resolve.record(enc);
                 Ok(())
             })?;
             resolved.extend(transfer::read_buffer::<Vec4>(&device, &averaged, range.len())?);

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use super::{BatchTimes, Renderer};
+use super::BatchTimes;
 use crate::params::FrameParams;
 use crate::scene::ImageSize;
 use crate::strategy::StrategyKind;
@@ -110,6 +110,22 @@ impl RenderTimes {
     }
 }
 
+/// The renderer that made the render, as the statistics report it: a plain value, so that the statistics
+/// know no renderer.
+pub(super) struct Engine {
+    pub sensor: crate::sensors::SensorKind,
+    pub sensor_size: u32,
+    pub strategy: StrategyKind,
+    pub batch_size: u32,
+    pub in_flight: u32,
+    /// Whether the sensor maps were drawn from the scene's clusters.
+    pub culled: bool,
+    /// How long building the renderer took (the strategy's choice, pipelines).
+    pub build: Duration,
+    /// What the camera's sensors cost, batch by batch.
+    pub batches: BatchTimes,
+}
+
 /// What the render loop counted.
 pub(super) struct Counts {
     pub sensors_per_round: Vec<u64>,
@@ -122,7 +138,7 @@ pub(super) struct Counts {
 impl RenderStats {
     pub(super) fn new(
         device: &Device,
-        renderer: &Renderer,
+        engine: Engine,
         size: ImageSize,
         frame: &FrameParams,
         counts: Counts,
@@ -135,9 +151,9 @@ impl RenderStats {
         Self {
             device: device.adapter.name.clone(),
             driver: device.adapter.driver.clone(),
-            sensor: renderer.config.sensor.to_string(),
-            strategy: renderer.strategy(),
-            sensor_size: renderer.config.sensor_size,
+            sensor: engine.sensor.to_string(),
+            strategy: engine.strategy,
+            sensor_size: engine.sensor_size,
             width: size.width,
             height: size.height,
             tile: frame.tile,
@@ -152,17 +168,14 @@ impl RenderStats {
             supersampled_pixels: counts.supersampled_pixels,
             supersampled_share: counts.supersampled_pixels as f64 / (size.width as f64 * size.height as f64),
             gi: counts.gi,
-            batch_size: renderer.batch_size(),
-            batches: renderer.runner.times.batches,
-            culled: renderer.culled(),
-            drawn_triangles_per_sensor: renderer
-                .runner
-                .times
-                .drawn_triangles
+            batch_size: engine.batch_size,
+            batches: engine.batches.batches,
+            culled: engine.culled,
+            drawn_triangles_per_sensor: (engine.batches.drawn_triangles)
                 .map(|t| if sensors > 0 { t as f64 / sensors as f64 } else { 0.0 }),
-            in_flight: renderer.runner.in_flight(),
+            in_flight: engine.in_flight,
             total_seconds: total,
-            build_seconds: renderer.build_time().as_secs_f64(),
+            build_seconds: engine.build.as_secs_f64(),
             times,
             sensor_time_ms: if all_sensors > 0 { 1e3 * total / all_sensors as f64 } else { 0.0 },
         }
