@@ -1,7 +1,8 @@
 //! Structs shared with the shaders, defined once here and mirrored in `glsl/types.glsl` (std430 / push
 //! constant layout). `tests/layout.rs` reads the member offsets and array strides out of the compiled SPIR-V
 //! and compares them with these definitions, so the two cannot drift apart silently. No `vec3` members:
-//! std430 aligns them to 16 bytes where Rust packs 12.
+//! std430 aligns them to 16 bytes where Rust packs 12. A table of layouts, one file on purpose (over 500
+//! lines): each struct beside the next, as `glsl/types.glsl` has them.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};

@@ -16,6 +16,7 @@
 
 pub mod entries;
 pub mod grid;
+pub mod polygon;
 pub mod reach;
 pub mod shape;
 pub mod solve;

@@ -9,6 +9,7 @@
 //! measures an image's error against a reference's (`sensorlight compare`, docs/ACCURACY.md).
 
 pub mod compare;
+mod picture;
 pub mod report;
 
 use std::sync::Arc;

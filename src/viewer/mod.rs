@@ -15,11 +15,11 @@
 pub mod display;
 pub mod orbit;
 mod present;
+mod progress;
 pub mod script;
 mod window;
 
 use std::cell::RefCell;
-use std::io::{BufRead as _, Write as _};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -30,13 +30,14 @@ use glam::Vec4;
 pub use display::Show;
 use orbit::Orbit;
 use present::Presenter;
+use progress::{ViewProgress, wait_for_stdin};
 use script::Command;
 pub use window::Action;
 use window::Window;
 
 use crate::cancel::{Cancelled, Reason};
 use crate::params::FrameParams;
-use crate::renderer::{BounceDone, Phase, Progress, RenderOutput, Renderer, RoundDone, Snapshot};
+use crate::renderer::{Phase, RenderOutput, Renderer};
 use crate::scene::{Camera, ImageSize, Scene};
 use crate::vk::{Device, WindowTarget};
 
@@ -456,61 +457,5 @@ impl Session<'_> {
             t[t.len() - 1],
             t.len()
         ))
-    }
-}
-
-/// Prints `line` on standard output and waits for a line on standard input (a test's turn to look).
-fn wait_for_stdin(line: &str) {
-    let mut out = std::io::stdout().lock();
-    let _ = writeln!(out, "{line}");
-    let _ = out.flush();
-    let mut answer = String::new();
-    let _ = std::io::stdin().lock().read_line(&mut answer);
-}
-
-/// The render's progress, seen by the window: every snapshot presented, the events read before each batch.
-struct ViewProgress<'s, 'h>(RefCell<&'s mut Session<'h>>);
-
-impl Progress for ViewProgress<'_, '_> {
-    fn phase(&self, phase: Phase) {
-        let mut s = self.0.borrow_mut();
-        s.this.phase = phase;
-        s.title(true);
-    }
-
-    fn done(&self, n: u64) {
-        let mut s = self.0.borrow_mut();
-        s.this.sensors += n;
-        s.title(false);
-    }
-
-    fn round(&self, round: &RoundDone) {
-        let mut s = self.0.borrow_mut();
-        s.this.resolved = round.resolved_pixels as f64 / round.pixels.max(1) as f64;
-    }
-
-    fn bounce(&self, bounce: &BounceDone) {
-        self.0.borrow_mut().this.bounce = bounce.bounce;
-    }
-
-    fn wants_snapshot(&self, _round: u32) -> bool {
-        true
-    }
-
-    fn snapshot(&self, snapshot: &Snapshot) {
-        let mut s = self.0.borrow_mut();
-        s.this.preview = Some(snapshot.image.clone());
-        s.this.rounds = snapshot.round;
-        s.title(true);
-        s.present();
-    }
-
-    fn cancelled(&self) -> Option<Reason> {
-        let mut s = self.0.borrow_mut();
-        if let Some(reason) = s.host.interrupted() {
-            return Some(reason);
-        }
-        s.pump(Some(Duration::ZERO));
-        (s.wanted || s.quit || s.error.is_some()).then_some(Reason::Superseded)
     }
 }

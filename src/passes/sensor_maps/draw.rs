@@ -1,0 +1,225 @@
+//! What the strategies draw the sensor maps from: the scene's vertices or its clusters (their draw lists,
+//! filled by the culling pass), materials, radiance cache and textures, and the pipeline that draws them.
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// One batch's indexed indirect draws: `max_per_view` command slots per view, and per view its number of
+/// draws and (after them, for statistics) of triangles, both written by the culling pass.
+pub struct DrawLists {
+    /// `GpuDrawCommand`s, view-major (device-local).
+    pub commands: Buffer,
+    /// Two `u32` per view of the largest batch (host-readable: the runner checks them for overflow).
+    pub counts: Buffer,
+    pub max_per_view: u32,
+    /// The device reads each view's count (`drawIndirectCount`); else every slot is drawn, the unused
+    /// ones zeroed by the culling pass.
+    pub count_buffer: bool,
+    /// The culling pass's walk: its queue of (node, view) pairs and its per-depth counts (device-local).
+    pub queue: Buffer,
+    pub walk: Buffer,
+}
+
+impl DrawLists {
+    pub(super) fn new(device: &Arc<Device>, views: u32, culled: &Culled) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let bytes = views as u64 * culled.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64;
+        let (storage, local) = (vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly);
+        let queue = culled.tree.queue_bytes(views as u64);
+        Ok(Self {
+            commands: Buffer::new(device, "sensor draw lists", bytes, usage, local)?,
+            counts: Buffer::new(device, "sensor draw counts", 8 * views as u64, usage, MemoryLocation::GpuToCpu)?,
+            max_per_view: culled.max_per_view,
+            count_buffer: culled.count_buffer,
+            queue: Buffer::new(device, "culling queue", queue, storage, local)?,
+            walk: Buffer::new(device, "culling walk", culled.tree.walk_bytes(), usage, local)?,
+        })
+    }
+}
+
+/// The cluster hierarchy a culled pipeline draws from.
+pub(super) struct Culled {
+    pub(super) vertices: Arc<Buffer>,
+    /// Their texture coordinates, for textures and cut-outs.
+    pub(super) uvs: Arc<Buffer>,
+    pub(super) indices: Arc<Buffer>,
+    pub(super) max_per_view: u32,
+    pub(super) count_buffer: bool,
+    pub(super) tree: TreeShape,
+}
+
+/// What every strategy draws the maps from: the scene's vertices (or clusters), materials, radiance cache
+/// and textures, and how emitters are written.
+pub(super) struct SensorInputs {
+    /// The scene's vertices, materials and radiance cache (the slots' descriptor sets name all but the
+    /// first).
+    pub(super) vertices: Arc<Buffer>,
+    pub(super) vertex_count: u32,
+    /// The soup's texture coordinates, for textures and cut-outs.
+    pub(super) uvs: Arc<Buffer>,
+    pub(super) surfaces: Arc<Buffer>,
+    pub(super) cache: [Arc<Buffer>; 3],
+    /// The texture table and texels, for textures and cut-outs.
+    pub(super) textures: [Arc<Buffer>; 2],
+    /// The exact estimator: emitter fronts leave 0 and their group.
+    pub(super) exact: bool,
+    /// The paper's estimator: maps hold `Ke` divided by this ([`emission_scale`]).
+    pub(super) emission_scale: f32,
+    /// Drawn from the scene's clusters, view by view; `None`: the whole soup.
+    pub(super) culled: Option<Culled>,
+    pub(super) device: Arc<Device>,
+}
+
+impl SensorInputs {
+    /// `cull`: draw from the scene's clusters where it has them.
+    pub(super) fn new(device: &Arc<Device>, scene: &GpuScene, desc: &StrategyDesc, cull: bool) -> Self {
+        Self {
+            vertices: scene.vertices.clone(),
+            vertex_count: scene.vertex_count,
+            surfaces: scene.surfaces.clone(),
+            cache: [scene.cache.table.clone(), scene.cache.values.clone(), scene.cache.splits.clone()],
+            textures: [scene.textures.clone(), scene.texels.clone()],
+            exact: desc.exact(),
+            emission_scale: emission_scale(scene, desc.fronts),
+            uvs: scene.uvs.clone(),
+            culled: scene.clusters.as_ref().filter(|_| cull).map(|c| Culled {
+                vertices: c.vertices.clone(),
+                uvs: c.uvs.clone(),
+                indices: c.indices.clone(),
+                max_per_view: c.max_per_view.max(1),
+                count_buffer: device.adapter.features.draw_indirect_count,
+                tree: c.tree.clone(),
+            }),
+            device: device.clone(),
+        }
+    }
+
+    /// `push` with how emitters are written.
+    pub(super) fn push(&self, push: &SensorPush) -> SensorPush {
+        SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push }
+    }
+
+    /// Bytes of draw lists and culling queue per sensor of `desc` (0 at full detail), for the batch size.
+    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
+        let per_view = self
+            .culled
+            .as_ref()
+            .map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
+        desc.layout.views() as u64 * per_view
+    }
+}
+
+/// A sensor pipeline: the render pass and the pipeline drawing the scene into sensor maps.
+pub(super) struct SensorPipeline {
+    // Field order is drop order.
+    pub(super) pipeline: Pipeline,
+    pub(super) layout: PipelineLayout,
+    pub(super) render_pass: RenderPass,
+    pub(super) inputs: SensorInputs,
+}
+
+impl SensorPipeline {
+    /// `vertex`: the strategy's vertex shader, and its `TEXTURES` variant for a scene with textures or cut-outs;
+    /// `view_mask` 0 for ordinary passes. `cull`: draw from the scene's clusters where it has them.
+    pub(super) fn new(
+        device: &Arc<Device>,
+        scene: &GpuScene,
+        desc: &StrategyDesc,
+        (vertex, view_mask): ([&[u8]; 2], u32),
+        cull: bool,
+    ) -> Result<Self> {
+        let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let (vertex_stage, fragment_stage) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::FRAGMENT);
+        // Views, materials and texture coordinates for the vertex shader, the radiance cache, materials and
+        // textures (the `TEXTURES` variant) for the fragment shader.
+        let layout = PipelineLayout::new(
+            device,
+            &[
+                (0, storage, vertex_stage),
+                (1, storage, vertex_stage | fragment_stage),
+                (2, storage, fragment_stage),
+                (3, storage, fragment_stage),
+                (4, storage, fragment_stage),
+                (5, storage, vertex_stage),
+                (6, storage, fragment_stage),
+                (7, storage, fragment_stage),
+            ],
+            size_of::<SensorPush>() as u32,
+            vertex_stage | fragment_stage,
+        )?;
+        let pipeline = Pipeline::graphics(
+            device,
+            &layout,
+            &GraphicsDesc {
+                vertex: vertex[scene.textured as usize],
+                fragment: if scene.textured { shaders::SENSOR_FRAG_TEXTURES } else { shaders::SENSOR_FRAG },
+                render_pass: render_pass.raw,
+                color_attachments: 1,
+                vertex_stride: VERTEX_STRIDE,
+                vertex_attributes: &VERTEX_ATTRIBUTES,
+                depth_compare: Some(DEPTH_COMPARE),
+            },
+        )?;
+        Ok(Self { pipeline, layout, render_pass, inputs: SensorInputs::new(device, scene, desc, cull) })
+    }
+
+    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
+        self.inputs.draw_bytes(desc)
+    }
+
+    /// Begins the render pass on `framebuffer` (over `area`, or all of it) and binds the pipeline, the
+    /// slot's views and the scene.
+    pub(super) fn begin<'e, 'a>(
+        &self,
+        enc: &'e Encoder<'a>,
+        slot: &SlotMaps,
+        framebuffer: &Framebuffer,
+        ck: CkParams,
+        area: Option<vk::Extent2D>,
+    ) -> RenderPassScope<'e, 'a> {
+        let pass = enc.begin_render_pass(&self.render_pass, framebuffer, &SlotMaps::clears(ck.background), area);
+        pass.bind(&self.pipeline, &self.layout, slot.set);
+        match &self.inputs.culled {
+            Some(c) => {
+                pass.bind_vertices(&c.vertices);
+                pass.bind_indices(&c.indices);
+            }
+            None => pass.bind_vertices(&self.inputs.vertices),
+        }
+        pass
+    }
+
+    /// Draws views `first..first + count` of the slot (each into the layer or tile it names): one instanced
+    /// draw of the whole scene, or, culled, each view's own draw list.
+    pub(super) fn draw_views(
+        &self,
+        pass: &RenderPassScope<'_, '_>,
+        slot: &SlotMaps,
+        push: &SensorPush,
+        (first, count): (u32, u32),
+    ) {
+        match &slot.draws {
+            None => self.draw(pass, push, count, first),
+            Some(d) => {
+                let push = self.inputs.push(push);
+                pass.push(&self.layout, &push);
+                let stride = size_of::<GpuDrawCommand>() as u64;
+                for v in first..first + count {
+                    let offset = v as u64 * d.max_per_view as u64 * stride;
+                    let counted = d.count_buffer.then_some((&d.counts, 4 * v as u64));
+                    pass.draw_indexed_indirect(&d.commands, offset, counted, d.max_per_view);
+                }
+            }
+        }
+    }
+
+    /// Draws the scene `instances` times starting at view `first_instance`.
+    pub(super) fn draw(&self, pass: &RenderPassScope<'_, '_>, push: &SensorPush, instances: u32, first_instance: u32) {
+        let push = self.inputs.push(push);
+        pass.push(&self.layout, &push);
+        pass.draw(self.inputs.vertex_count, instances, 0, first_instance);
+    }
+}
