@@ -134,17 +134,7 @@ pub fn self_check(
     estimator: EstimatorKind,
     kind: StrategyKind,
 ) -> Result<strategy::CheckResult> {
-    let config = RendererConfig {
-        estimator,
-        sensor,
-        sensor_size: strategy::CHECK_RD,
-        memory_budget: None,
-        max_batch: None,
-        in_flight: DEFAULT_IN_FLIGHT,
-        strategy: StrategyRequest::Fixed(kind),
-        detail: Detail::Full,
-        cache: None,
-    };
+    let config = RendererConfig::fixed(estimator, sensor, strategy::CHECK_RD, kind);
     let budget = default_memory_budget(device, DEFAULT_IN_FLIGHT);
     strategy::self_check(&mut probe::ProbeRenderer::new(device, &config, budget, 0), kind)
 }
@@ -157,17 +147,7 @@ pub fn unsupported(
     (sensor, estimator, rd): (SensorKind, EstimatorKind, u32),
     kind: StrategyKind,
 ) -> Option<String> {
-    let config = RendererConfig {
-        estimator,
-        sensor,
-        sensor_size: rd,
-        memory_budget: None,
-        max_batch: None,
-        in_flight: DEFAULT_IN_FLIGHT,
-        strategy: StrategyRequest::Fixed(kind),
-        detail: Detail::Full,
-        cache: None,
-    };
+    let config = RendererConfig::fixed(estimator, sensor, rd, kind);
     let layout = config.layout(&Lights::new(&scene.mesh));
     let desc = StrategyDesc { layout, fronts: fronts(estimator), rd, budget: config.batch_budget(device, &layout) };
     crate::passes::sensor_maps::unsupported(kind, device, &desc)
@@ -190,17 +170,7 @@ impl Renderer {
         sensor: SensorKind,
         sensor_size: u32,
     ) -> RendererBuilder<'a> {
-        let config = RendererConfig {
-            estimator: EstimatorKind::default(),
-            sensor,
-            sensor_size,
-            memory_budget: None,
-            max_batch: None,
-            in_flight: DEFAULT_IN_FLIGHT,
-            strategy: StrategyRequest::Auto,
-            detail: Detail::Auto,
-            cache: None,
-        };
+        let config = RendererConfig::new(EstimatorKind::default(), sensor, sensor_size);
         RendererBuilder { device, scene, config, cache: None, events: None }
     }
 

@@ -6,7 +6,7 @@ use crate::params::{EstimatorKind, RenderParams};
 use crate::passes::sensor_maps::TEXEL_BYTES;
 use crate::sensors::SensorKind;
 use crate::sensors::layout::SensorLayout;
-use crate::strategy::StrategyRequest;
+use crate::strategy::{StrategyKind, StrategyRequest};
 use crate::vk::Device;
 
 /// Batches in flight by default: one rendering while the host prepares the next.
@@ -95,6 +95,32 @@ impl CacheConfig {
 }
 
 impl RendererConfig {
+    /// A renderer for sensors of `sensor` kind and size `sensor_size` read by `estimator`: the `auto`
+    /// strategy and level of detail, the default budget and batches in flight, no radiance cache.
+    pub fn new(estimator: EstimatorKind, sensor: SensorKind, sensor_size: u32) -> Self {
+        Self {
+            estimator,
+            sensor,
+            sensor_size,
+            memory_budget: None,
+            max_batch: None,
+            in_flight: DEFAULT_IN_FLIGHT,
+            strategy: StrategyRequest::Auto,
+            detail: Detail::Auto,
+            cache: None,
+        }
+    }
+
+    /// [`RendererConfig::new`] with strategy `kind` and every triangle drawn: what the strategies' checks
+    /// and their support are judged on.
+    pub fn fixed(estimator: EstimatorKind, sensor: SensorKind, sensor_size: u32, kind: StrategyKind) -> Self {
+        Self {
+            strategy: StrategyRequest::Fixed(kind),
+            detail: Detail::Full,
+            ..Self::new(estimator, sensor, sensor_size)
+        }
+    }
+
     /// The layers one sensor occupies with the scene's `lights`: the main layers, and with the exact
     /// estimator a zoom pair per light group.
     pub fn layout(&self, lights: &Lights) -> SensorLayout {

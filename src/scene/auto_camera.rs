@@ -207,16 +207,7 @@ pub fn frame(bounds: &Aabb, size: ImageSize, front_area: impl Fn(Vec3) -> f32) -
     let true_up = right.cross(forward);
     let (tan_v, aspect) = ((0.5 * VFOV_DEG.to_radians()).tan(), size.width as f32 / size.height as f32);
     let radius = (0.5 * extent.length()).max(f32::MIN_POSITIVE);
-    let corners: Vec<Vec3> = (0..8)
-        .map(|i| {
-            let pick = |bit: usize, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-            Vec3::new(
-                pick(1, bounds.min.x, bounds.max.x),
-                pick(2, bounds.min.y, bounds.max.y),
-                pick(4, bounds.min.z, bounds.max.z),
-            )
-        })
-        .collect();
+    let corners = bounds.corners();
     // Each corner seen from a target: across, up and beyond it.
     let seen = |target: Vec3| {
         corners
@@ -256,13 +247,7 @@ mod tests {
         let bounds = *bounds;
         let near = 1e-4 * bounds.diagonal();
         let view_proj = camera.view_proj(size.width, size.height, near);
-        for i in 0..8 {
-            let pick = |bit: usize, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-            let corner = Vec3::new(
-                pick(1, bounds.min.x, bounds.max.x),
-                pick(2, bounds.min.y, bounds.max.y),
-                pick(4, bounds.min.z, bounds.max.z),
-            );
+        for corner in bounds.corners() {
             let clip = view_proj * corner.extend(1.0);
             assert!(clip.w > near, "corner {corner} behind the camera ({bounds:?}, {size:?})");
             let ndc = clip.truncate().truncate() / clip.w;
@@ -310,8 +295,7 @@ mod tests {
             // The corners' extent across the narrower side of the image, in normalised device coordinates.
             let view_proj = camera.view_proj(width, height, 1e-3);
             let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
-            for i in 0..8 {
-                let corner = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32) * 2.0;
+            for corner in cube.corners() {
                 let clip = view_proj * corner.extend(1.0);
                 let ndc = clip.truncate().truncate() / clip.w;
                 (lo, hi) = (lo.min(ndc), hi.max(ndc));

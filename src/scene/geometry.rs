@@ -68,6 +68,14 @@ impl Aabb {
     pub fn farthest(&self, p: Vec3) -> f32 {
         (p - self.min).abs().max((p - self.max).abs()).length()
     }
+
+    /// Its eight corners: bit 0 of the index picks x's max, bit 1 y's, bit 2 z's.
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            let pick = |bit: usize, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+            Vec3::new(pick(1, self.min.x, self.max.x), pick(2, self.min.y, self.max.y), pick(4, self.min.z, self.max.z))
+        })
+    }
 }
 
 /// The corners' `values` of triangle `v` (shading normals, texture coordinates) interpolated at `p` by its
@@ -157,6 +165,16 @@ pub fn stratified_point(areas: &[f32], total: f32, k: usize, count: usize) -> (u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_boxs_corners_are_every_mix_of_its_bounds() {
+        let b = Aabb { min: Vec3::new(-1.0, 2.0, 3.0), max: Vec3::new(4.0, 5.0, 6.0) };
+        let c = b.corners();
+        assert_eq!((c[0], c[7]), (b.min, b.max));
+        assert_eq!(c[1], Vec3::new(4.0, 2.0, 3.0), "bit 0: x's max");
+        assert_eq!(c[6], Vec3::new(-1.0, 5.0, 6.0), "bits 1 and 2: y's and z's max");
+        assert_eq!(Aabb::of(c), b);
+    }
 
     /// k × k congruent parts, counter-clockwise as the triangle is, that tile it: their areas sum to its
     /// area and their centroids are distinct.

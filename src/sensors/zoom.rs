@@ -36,17 +36,7 @@ impl Zoom {
     /// `origin`, nothing can stand between `origin` and a point of `bounds`: past its farthest corner, with
     /// `margin` (world units) to spare.
     pub fn far_plane(&self, origin: Vec3, bounds: &Aabb, margin: f32) -> Vec4 {
-        let far = (0..8)
-            .map(|i| {
-                let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-                let corner = Vec3::new(
-                    pick(1, bounds.min.x, bounds.max.x),
-                    pick(2, bounds.min.y, bounds.max.y),
-                    pick(4, bounds.min.z, bounds.max.z),
-                );
-                self.forward.dot(corner - origin)
-            })
-            .fold(f32::MIN, f32::max);
+        let far = bounds.corners().iter().map(|&c| self.forward.dot(c - origin)).fold(f32::MIN, f32::max);
         let far = far + margin + 1e-4 * far.abs();
         (-self.forward).extend(self.forward.dot(origin) + far)
     }
@@ -57,16 +47,7 @@ impl Zoom {
     /// wholly on or below the plane through `origin` with normal `n`: no part of the group is above the
     /// sensor's horizon, so it sends the sensor nothing.
     pub fn towards(origin: Vec3, n: Vec3, bounds: &Aabb, up_hint: Vec3, margin: f32) -> Option<Self> {
-        let corners: Vec<Vec3> = (0..8)
-            .map(|i| {
-                let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-                Vec3::new(
-                    pick(1, bounds.min.x, bounds.max.x),
-                    pick(2, bounds.min.y, bounds.max.y),
-                    pick(4, bounds.min.z, bounds.max.z),
-                ) - origin
-            })
-            .collect();
+        let corners = bounds.corners().map(|c| c - origin);
         if corners.iter().all(|c| c.dot(n) <= 0.0) {
             return None;
         }
