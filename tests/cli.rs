@@ -335,6 +335,22 @@ fn every_flag_in_help_is_in_the_usage_guide() {
     assert!(missing.is_empty(), "flags missing from their docs/USAGE.md sections: {missing:?}");
 }
 
+/// The guide's sentence on the scene file's `[render]` table names every parameter's key, from the table.
+#[test]
+fn every_render_key_is_in_the_usage_guide() {
+    let guide = std::fs::read_to_string(common::project("docs/USAGE.md")).unwrap();
+    let Some(at) = guide.find("a scene file's `[render]` table may set any of them") else {
+        panic!("docs/USAGE.md no longer says which keys `[render]` takes")
+    };
+    let sentence = &guide[at..at + guide[at..].find(".\n").unwrap_or(guide.len() - at)];
+    let missing: Vec<&str> = sensorlight::params::Param::ALL
+        .iter()
+        .map(|p| p.key())
+        .filter(|key| !sentence.contains(&format!("`{key}`")))
+        .collect();
+    assert!(missing.is_empty(), "[render] keys missing from docs/USAGE.md: {missing:?}");
+}
+
 fn tiny(scene: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec!["render", scene, "-o", out.to_str().unwrap(), "--width", "16", "--height", "16"];
     args.extend_from_slice(&["--sensor-size", "16"]);

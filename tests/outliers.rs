@@ -69,8 +69,8 @@ fn no_pixel_of_the_shipped_scenes_is_an_outlier_the_oracle_does_not_share() {
             p.estimator.indirect = Indirect::Epsilon(0.0);
         }
         let out = common::gpu(|device| {
-            Renderer::builder(device, &scene, p.estimator.sensor, p.sensor_size)
-                .estimator(p.estimator_kind)
+            Renderer::builder(device, &scene, p.estimator.sensor, p.values.sensor_size)
+                .estimator(p.values.estimator)
                 .radiance_cache(CacheConfig::for_params(&p))
                 .build_unchecked(Default::default())
                 .unwrap()
@@ -82,7 +82,7 @@ fn no_pixel_of_the_shipped_scenes_is_an_outlier_the_oracle_does_not_share() {
         if candidates.is_empty() {
             continue;
         }
-        let oracle = Integrator::new(&scene, p.estimator, 256, 3).unwrap().render(size, p.aa, &|_| ());
+        let oracle = Integrator::new(&scene, p.estimator, 256, 3).unwrap().render(size, p.values.aa, &|_| ());
         let shared = outliers(&oracle.image, &oracle.gbuffer, &[], F / 2.0);
         let unexplained: Vec<_> = candidates.iter().filter(|i| !shared.contains(i)).collect();
         assert!(unexplained.is_empty(), "{file}: outliers the oracle does not share at pixels {unexplained:?}");

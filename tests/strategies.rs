@@ -270,8 +270,8 @@ fn every_strategy_renders_alike(file: &str) {
     let size = ImageSize { width: 96, height: 96 };
     common::gpu(|device| {
         let render = |kind| {
-            let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.sensor_size)
-                .estimator(params.estimator_kind)
+            let mut renderer = Renderer::builder(device, &scene, params.estimator.sensor, params.values.sensor_size)
+                .estimator(params.values.estimator)
                 .radiance_cache(renderer::CacheConfig::for_params(&params))
                 .build_unchecked(kind)
                 .unwrap();
@@ -282,7 +282,7 @@ fn every_strategy_renders_alike(file: &str) {
         let mut compared = Vec::new();
         for kind in StrategyKind::ALL.into_iter().filter(|&k| k != StrategyKind::PerSensor) {
             // Unsupported or failing its check: refused by name and by auto (`agrees_with_per_sensor`).
-            let Ok(check) = renderer::self_check(device, params.estimator.sensor, params.estimator_kind, kind) else {
+            let Ok(check) = renderer::self_check(device, params.estimator.sensor, params.values.estimator, kind) else {
                 continue;
             };
             if !check.passed {

@@ -10,11 +10,10 @@ use sensorlight::bench::{self, BenchConfig, BenchEvent, BenchReport, MeshBenchCo
 use sensorlight::outln;
 use sensorlight::output::atomic;
 use sensorlight::output::plot::{Chart, Series};
-use sensorlight::params::{DEFAULT_ESTIMATOR, EstimatorKind, RenderParams};
+use sensorlight::params::flags::{FlagSet, ParamFlags};
+use sensorlight::params::{Param, RenderParams};
 use sensorlight::scene::{ImageSize, builtin};
 use sensorlight::strategy::StrategyKind;
-
-use super::args::{EstimatorFlags, estimator_help};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -40,10 +39,8 @@ pub struct BenchArgs {
     /// Timed runs per strategy and size (after one warm-up run), interleaved
     #[arg(long, default_value_t = 5)]
     repeat: usize,
-    #[arg(long = "estimator", value_enum, help = estimator_help(DEFAULT_ESTIMATOR))]
-    estimator_kind: Option<EstimatorKind>,
     #[command(flatten)]
-    estimator: EstimatorFlags,
+    params: ParamFlags<BenchParams>,
     /// Write the report as JSON
     #[arg(long)]
     json: Option<PathBuf>,
@@ -56,6 +53,13 @@ pub struct BenchArgs {
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
+}
+
+/// What `bench` takes of the parameters: what a sensor sees and how it is read.
+pub enum BenchParams {}
+
+impl FlagSet for BenchParams {
+    const PARAMS: &'static [Param] = &[Param::Estimator, Param::Sensor, Param::Fov, Param::Epsilon, Param::Background];
 }
 
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
@@ -74,13 +78,13 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let strategies = if args.strategies.is_empty() { StrategyKind::ALL.to_vec() } else { args.strategies.clone() };
     let size = ImageSize { width: 128, height: 128 };
     let (scene, params) = match &args.scene {
-        Some(path) => super::load_scene(path, &args.estimator.overrides())?,
-        None => (builtin::lightbox(size), RenderParams::resolve(None, &args.estimator.overrides())?),
+        Some(path) => super::load_scene(path, &args.params.values)?,
+        None => (builtin::lightbox(size), RenderParams::resolve(None, &args.params.values)?),
     };
     let estimator = params.estimator;
     let config = BenchConfig {
         scene,
-        estimator_kind: args.estimator_kind.unwrap_or(params.estimator_kind),
+        estimator_kind: params.values.estimator,
         size,
         estimator,
         sizes: args.sizes.clone(),
@@ -125,14 +129,14 @@ fn run_meshes(args: &BenchArgs) -> Result<ExitCode> {
     let mut scenes = Vec::new();
     let mut params = None;
     for path in &args.scenes {
-        let (scene, p) = super::load_scene(path, &args.estimator.overrides())?;
+        let (scene, p) = super::load_scene(path, &args.params.values)?;
         params.get_or_insert(p);
         scenes.push((path.display().to_string(), scene));
     }
     let params = params.expect("at least one scene");
     let config = MeshBenchConfig {
         scenes,
-        estimator_kind: args.estimator_kind.unwrap_or(params.estimator_kind),
+        estimator_kind: params.values.estimator,
         size: ImageSize { width: 128, height: 128 },
         estimator: params.estimator,
         sizes: args.sizes.clone(),

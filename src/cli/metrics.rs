@@ -8,14 +8,13 @@ use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 use sensorlight::cancel::{Cancel, Reason};
 use sensorlight::metrics::{self, MetricsConfig, report};
+use sensorlight::params::flags::{FlagSet, ParamFlags};
 use sensorlight::params::{
-    DEFAULT_EPSILON, DEFAULT_FILTER_RADIUS, EstimatorKind, Overrides, RenderParams, SensorShape,
+    DEFAULT_EPSILON, DEFAULT_FILTER_RADIUS, EstimatorKind, Overrides, Param, RenderParams, SensorShape,
 };
 use sensorlight::renderer::Progress;
 use sensorlight::scene::ImageSize;
 use sensorlight::strategy::{Cache, StrategyRequest};
-
-use super::args::{EstimatorFlags, RefinementFlags, estimator_help};
 
 #[derive(Args)]
 // `render`'s flags, said as they act here: the paper's model and estimator, no mesh lit by a white sky.
@@ -34,7 +33,7 @@ pub struct MetricsArgs {
     /// Output directory (created if needed): CSV, Markdown, SVG and PNG per experiment, and metrics.json
     #[arg(short, long)]
     output: PathBuf,
-    #[arg(long, value_enum, help = estimator_help(EstimatorKind::Paper))]
+    #[arg(long, value_enum, help = format!("How R is read from the sensor maps [default: {}]", EstimatorKind::Paper))]
     estimator: Option<EstimatorKind>,
     /// Table I: sensor time against screen resolution (all three when none of these is given)
     #[arg(long)]
@@ -63,15 +62,28 @@ pub struct MetricsArgs {
     #[arg(long)]
     quick: bool,
     #[command(flatten)]
-    estimator_flags: EstimatorFlags,
-    #[command(flatten)]
-    refinement: RefinementFlags,
+    params: ParamFlags<MetricsParams>,
     /// Batching strategy: auto or a name (see `render --help`)
     #[arg(long, value_enum, default_value_t = StrategyRequest::Auto)]
     strategy: StrategyRequest,
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     device: Option<usize>,
+}
+
+/// What `metrics` takes of the parameters as `render` does; its estimator and map size are its own.
+pub enum MetricsParams {}
+
+impl FlagSet for MetricsParams {
+    const PARAMS: &'static [Param] = &[
+        Param::Sensor,
+        Param::Fov,
+        Param::Epsilon,
+        Param::Background,
+        Param::Tile,
+        Param::Dradiance,
+        Param::FilterRadius,
+    ];
 }
 
 fn parse_resolution(s: &str) -> Result<ImageSize, String> {
@@ -133,17 +145,14 @@ pub fn run(args: MetricsArgs) -> Result<ExitCode> {
         sensor_size: from_file.sensor_size.or(Some(if args.quick { 32 } else { 256 })),
         ..from_file
     };
-    let overrides = args.refinement.overrides(Overrides {
-        estimator: args.estimator,
-        sensor_size: args.sensor_size,
-        ..args.estimator_flags.overrides()
-    });
+    let overrides =
+        Overrides { estimator: args.estimator, sensor_size: args.sensor_size, ..args.params.values.clone() };
     let params = RenderParams::resolve(Some((&scene_path, &from_file)), &overrides)?;
     let mut config = MetricsConfig::new(scene_name, params.clone());
     if args.quick {
         config = config.quick();
     }
-    config.table1_sensor_size = params.sensor_size;
+    config.table1_sensor_size = params.values.sensor_size;
     if !args.sizes.is_empty() {
         config.figure_sizes = args.sizes.clone();
     }

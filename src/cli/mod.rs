@@ -310,8 +310,8 @@ fn build_renderer(
     cache: &mut sensorlight::strategy::Cache,
     report: &mut dyn FnMut(Event),
 ) -> Result<sensorlight::renderer::Renderer> {
-    sensorlight::renderer::Renderer::builder(device, scene, params.estimator.sensor, params.sensor_size)
-        .estimator(params.estimator_kind)
+    sensorlight::renderer::Renderer::builder(device, scene, params.estimator.sensor, params.values.sensor_size)
+        .estimator(params.values.estimator)
         .radiance_cache(sensorlight::renderer::CacheConfig::for_params(params))
         .memory_budget(engine.memory_budget.map(|mib| mib << 20))
         .in_flight(engine.in_flight)
@@ -372,26 +372,27 @@ fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &G
     use sensorlight::output::png;
     use sensorlight::params::{Origin, Param};
     if params.origin(Param::Exposure) != Origin::Default {
-        return (params.exposure, None);
+        return (params.values.exposure, None);
     }
     let lit: Vec<f32> = (image.iter().zip(&g.surface).zip(&g.emission))
         .filter(|((_, id), le)| **id != sensorlight::scene::NO_SURFACE && le.truncate() == glam::Vec3::ZERO)
         .map(|((p, _), _)| png::luminance(*p))
         .filter(|&y| y > 0.0 && y.is_finite())
         .collect();
-    let clipped = lit.iter().filter(|&&y| y * params.exposure.exp2() > 1.0).count() as f64 / lit.len().max(1) as f64;
+    let clipped =
+        lit.iter().filter(|&&y| y * params.values.exposure.exp2() > 1.0).count() as f64 / lit.len().max(1) as f64;
     let why = if FileKind::of(input).is_mesh() {
         String::new()
     } else if clipped > CLIPPED_AT_MOST {
-        format!("at the default {}, {:.0} % of lit pixels would clip white; ", params.exposure, 100.0 * clipped)
+        format!("at the default {}, {:.0} % of lit pixels would clip white; ", params.values.exposure, 100.0 * clipped)
     } else {
-        return (params.exposure, None);
+        return (params.values.exposure, None);
     };
     match png::auto_exposure(lit) {
         Some(stops) => {
             let sets = if why.is_empty() { "--exposure" } else { "the scene file's `exposure` or --exposure" };
             (stops, Some(format!("exposure {stops:.1} (auto: {why}99th percentile of lit pixels; {sets} sets it)")))
         }
-        None => (params.exposure, None),
+        None => (params.values.exposure, None),
     }
 }

@@ -8,10 +8,11 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use sensorlight::cancel::Cancel;
 use sensorlight::output::{atomic, exr::ExrImage, png};
-use sensorlight::params::Overrides;
+use sensorlight::params::Param;
+use sensorlight::params::flags::{FlagSet, ParamFlags};
 use sensorlight::reference::integrator::{Integrator, REPLICATES};
 
-use super::args::{BounceFlags, EstimatorFlags, ImageFlags, LightFlags};
+use super::args::{ImageFlags, LightFlags};
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -23,9 +24,7 @@ pub struct ReferenceArgs {
     #[arg(short, long, value_name = "F.exr|F.png")]
     output: PathBuf,
     #[command(flatten)]
-    estimator: EstimatorFlags,
-    #[command(flatten)]
-    bounces: BounceFlags,
+    params: ParamFlags<ReferenceParams>,
     #[command(flatten)]
     image: ImageFlags,
     #[command(flatten)]
@@ -42,15 +41,20 @@ pub struct ReferenceArgs {
     seed: u64,
 }
 
+/// What the reference takes of the parameters: what a sensor sees and the image; the rest (refinement,
+/// filters, the cache) is the renderer's.
+pub enum ReferenceParams {}
+
+impl FlagSet for ReferenceParams {
+    const PARAMS: &'static [Param] =
+        &[Param::Sensor, Param::Fov, Param::Epsilon, Param::Background, Param::Bounces, Param::Exposure, Param::Aa];
+}
+
 pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     let outputs = super::ImageOutputs::new(&args.output, args.image.write_png())?;
     outputs.check(&[], &[&args.scene])?;
-    let flags = args.bounces.overrides(Overrides {
-        exposure: args.image.exposure,
-        aa: args.image.aa,
-        ..args.estimator.overrides()
-    });
+    let flags = args.params.values.clone();
     let (scene, resolved) =
         super::load_input(&args.scene, &flags, (args.image.width, args.image.height), &args.lights)?;
     outputs.check(&[], &scene.input_paths())?;
@@ -75,7 +79,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         "reference: {}x{}, {}, {} sensor domain, {}, {} samples per pixel ({REPLICATES} × {}; {strategies}), seed {}",
         size.width,
         size.height,
-        match resolved.aa {
+        match resolved.values.aa {
             sensorlight::params::Antialiasing::On => "each pixel over its square (each sample at its own point)",
             sensorlight::params::Antialiasing::Off => "each pixel at its centre (--aa off)",
         },
@@ -87,7 +91,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     );
     let bar = super::counter::Counter::new(size.height as u64, "rows");
     let start = Instant::now();
-    let result = integrator.render_until(size, resolved.aa, &|rows| bar.inc(rows), &cancel);
+    let result = integrator.render_until(size, resolved.values.aa, &|rows| bar.inc(rows), &cancel);
     bar.finish();
     let result = result?;
     let seconds = start.elapsed().as_secs_f64();

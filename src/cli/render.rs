@@ -86,8 +86,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     super::with_device(args.engine.device, |device| {
         let started = Instant::now();
-        let preview =
-            preview.map(|path| Preview { every: args.preview_every.unwrap_or(1), path, exposure: params.exposure });
+        let preview = preview.map(|path| Preview {
+            every: args.preview_every.unwrap_or(1),
+            path,
+            exposure: params.values.exposure,
+        });
         let progress = RenderProgress::new(size.width as u64 * size.height as u64, preview, cancel.clone());
         let _remove_preview = RemoveOnDrop(preview_path(&args.output), args.preview_every.is_some());
         let mut cache = Cache::open_default();

@@ -74,7 +74,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         scene: &scene,
         size,
         frame: params.frame(),
-        exposure: params.exposure,
+        exposure: params.values.exposure,
         name,
         output: args.output.clone(),
         script,

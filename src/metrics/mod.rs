@@ -47,7 +47,7 @@ pub const FIGURE_SIZES: [u32; 5] = [16, 32, 64, 128, 256];
 #[derive(Clone, Debug, Serialize)]
 pub struct MetricsConfig {
     pub scene: String,
-    /// Everything but the map size: Table I uses `params.sensor_size`, the figures `figure_sizes`.
+    /// Everything but the map size: Table I uses `params.values.sensor_size`, the figures `figure_sizes`.
     #[serde(skip)]
     pub params: RenderParams,
     pub sensor: String,
@@ -71,11 +71,11 @@ impl MetricsConfig {
         Self {
             scene,
             sensor: params.estimator.sensor.to_string(),
-            table1_sensor_size: params.sensor_size,
-            tile: params.tile,
-            dradiance: params.dradiance,
+            table1_sensor_size: params.values.sensor_size,
+            tile: params.values.tile,
+            dradiance: params.values.dradiance,
             epsilon: params.estimator.indirect.paper_epsilon(),
-            filter_radius: params.filter_radius,
+            filter_radius: params.values.filter_radius,
             params,
             table1_resolutions: PAPER_TABLE1.iter().map(|&(w, h, _, _)| size(&(w, h))).collect(),
             figure_resolutions: FIGURE_RESOLUTIONS.iter().map(size).collect(),
@@ -158,7 +158,7 @@ pub fn run(
             previous => {
                 drop(previous); // free the previous map size's images first
                 let renderer = Renderer::builder(device, scene, sensor, rd)
-                    .estimator(config.params.estimator_kind)
+                    .estimator(config.params.values.estimator)
                     .strategy(config.strategy)
                     .cache(cache)
                     .build()?;

@@ -1,9 +1,8 @@
 //! The algorithm's parameters: one place for their defaults, ranges and checks. A value comes from a
-//! command-line flag, else the scene file's `[render]` table, else the default below; an error names the
+//! command-line flag, else the scene file's `[render]` table, else the table's default (`table.rs`); an error names the
 //! parameter as the user wrote it there (`--tile` on the command line, `[render] tile` in a scene file).
 
 use std::collections::BTreeMap;
-use std::fmt;
 use std::path::Path;
 
 use glam::Vec3;
@@ -11,66 +10,24 @@ use glam::Vec3;
 use crate::sensors::SensorKind;
 pub use crate::sensors::SensorShape;
 
+#[macro_use]
+pub(crate) mod declare;
+pub mod flags;
 mod kinds;
 mod overrides;
 mod param;
+mod table;
 
+pub use declare::{EstimatorDefault, Fallback};
 pub use kinds::{Antialiasing, Bounces, EstimatorKind, Indirect};
-pub use overrides::Overrides;
-pub use param::{Origin, Param, ParamError};
+pub use param::{Origin, ParamError};
+pub use table::{
+    DEFAULT_EPSILON, DEFAULT_ESTIMATOR, DEFAULT_FILTER_RADIUS, MAX_CACHE_RESOLUTION, MAX_FILTER_RADIUS, Overrides,
+    Param, Values,
+};
 
-pub const DEFAULT_SENSOR: SensorShape = SensorShape::Hemicube;
-pub const DEFAULT_FOV_DEG: f32 = 135.0;
-/// ε of the paper's model when `--epsilon` is given without a value in mind (`metrics`, `bench`).
-pub const DEFAULT_EPSILON: f32 = 0.1;
 /// `render`'s and `reference`'s light: global illumination until converged.
 pub const DEFAULT_INDIRECT: Indirect = Indirect::Bounces(Bounces::Converged);
-/// The sensor map size and filter radius by estimator. The exact estimator reads only visibility from its
-/// maps, through zoom views: 32² maps keep every shipped and hard scene within 1 % of the oracle, and its
-/// little noise the filter cannot lower without blurring real gradients (docs/ACCURACY.md). The paper's
-/// estimator keeps the paper's 256² and the filter that hides its tiles.
-pub const DEFAULT_SENSOR_SIZE: EstimatorDefault<u32> = EstimatorDefault { exact: 32, paper: 256 };
-/// The widest filter: σ = 32 pixels blurs far beyond any sensor spacing, and each pixel reads (2r + 1)²
-/// neighbours. (Measured on lavapipe: from r = 181, (2r + 1)² > 2¹⁷ iterations, the driver cut the loop
-/// short and pixels were left without even their own sample: NaN.)
-pub const MAX_FILTER_RADIUS: u32 = 64;
-pub const DEFAULT_FILTER_RADIUS: EstimatorDefault<u32> = EstimatorDefault { exact: 0, paper: 2 };
-/// The indirect part's own filter radius with global illumination (docs/ACCURACY.md: the door ajar's
-/// per-pixel error against the path tracer, the Cornell box's unchanged).
-pub const DEFAULT_INDIRECT_FILTER_RADIUS: u32 = 1;
-
-/// A default that depends on the estimator.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EstimatorDefault<T> {
-    pub exact: T,
-    pub paper: T,
-}
-
-impl<T: Copy> EstimatorDefault<T> {
-    pub fn for_estimator(&self, kind: EstimatorKind) -> T {
-        match kind {
-            EstimatorKind::Exact => self.exact,
-            EstimatorKind::Paper => self.paper,
-        }
-    }
-}
-
-impl<T: fmt::Display> fmt::Display for EstimatorDefault<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} (paper's estimator: {})", self.exact, self.paper)
-    }
-}
-pub const DEFAULT_TILE: u32 = 16;
-/// The radiance cache's cells along the scene's longest side (docs/ACCURACY.md: error against time).
-pub const DEFAULT_CACHE_RESOLUTION: u32 = 16;
-/// rd of the radiance cache's sensors after its first bounce: they see only the smooth light surfaces
-/// reflect, which the camera's sensors then gather (docs/ACCURACY.md).
-pub const DEFAULT_CACHE_SENSOR_SIZE: u32 = 16;
-/// The most cells along an axis the cache's keys hold (`gi::grid::MAX_CELLS`, less the corner's offset).
-pub const MAX_CACHE_RESOLUTION: u32 = 1022;
-pub const DEFAULT_DRADIANCE: f32 = 0.2;
-pub const DEFAULT_EXPOSURE: f32 = 0.0;
-pub const DEFAULT_ESTIMATOR: EstimatorKind = EstimatorKind::Exact;
 
 /// What a sensor sees (docs/DESIGN.md §1–2); shared by the GPU renderer and the CPU reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,28 +86,11 @@ impl FrameParams {
 /// Everything `render` resolves from flags, the scene file and defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderParams {
-    /// How R is estimated from the maps.
-    pub estimator_kind: EstimatorKind,
+    /// Each parameter as resolved on its own (see the table, `table.rs`, for ranges and typical values).
+    pub values: Values,
+    /// What a sensor sees, from the values that decide it together: the sensor's shape and field of view,
+    /// the one model of indirect light (ε or bounces), the background. Read this, not those values.
     pub estimator: EstimatorParams,
-    /// rd: sensor map side in texels, 2 … the device's largest image side (even for hemicubes). Cost grows
-    /// roughly with rd²; 16–64 typical with the exact estimator (whose maps resolve only visibility, in zoom
-    /// views of rd² each), 128–256 with the paper's (the paper: 256).
-    pub sensor_size: u32,
-    pub tile: u32,
-    pub dradiance: f32,
-    pub filter_radius: u32,
-    pub indirect_filter_radius: u32,
-    /// Global illumination: the radiance cache's cells along the scene's longest side, 1 to
-    /// [`MAX_CACHE_RESOLUTION`]; 8–32 typical. The cache's sensors (about 2 per cell of surface, so 4× for
-    /// twice the resolution) are sensed once per bounce; the camera's sensors gather it, so it may be
-    /// coarse.
-    pub cache_resolution: u32,
-    /// rd of the radiance cache's sensors after its first bounce (which measures the direct light at
-    /// `sensor_size`), 2 … the device's largest image side (even for hemicubes); 8–32 typical.
-    pub cache_sensor_size: u32,
-    /// Exposure of the PNG preview in stops (the EXR is never scaled).
-    pub exposure: f32,
-    pub aa: Antialiasing,
     /// Where each value that was set came from (absent: the default).
     origins: BTreeMap<Param, Origin>,
 }
@@ -167,72 +107,29 @@ impl RenderParams {
         flags.check(&Origin::Flag)?;
 
         let mut origins = BTreeMap::new();
-        let indirect = {
-            // One model: a flag of either kind overrides the scene file's, whichever kind that set.
-            let (from, origin) = if flags.epsilon.is_some() || flags.bounces.is_some() {
-                (flags, Origin::Flag)
-            } else {
-                (scene, scene_origin.clone())
-            };
-            match (from.epsilon, from.bounces) {
-                (Some(e), _) => {
-                    origins.insert(Param::Epsilon, origin);
-                    Indirect::Epsilon(e)
-                }
-                (None, Some(b)) => {
-                    origins.insert(Param::Bounces, origin);
-                    Indirect::Bounces(b)
-                }
-                (None, None) => DEFAULT_INDIRECT,
-            }
+        let kind = flags.estimator.or(scene.estimator).unwrap_or(DEFAULT_ESTIMATOR);
+        let values = Values::resolve(flags, scene, &scene_origin, kind, &mut origins);
+        // One model: a flag of either kind overrides the scene file's, whichever kind that set.
+        let set_at = |param, level| origins.get(&param) == Some(level);
+        let indirect = [Origin::Flag, scene_origin]
+            .iter()
+            .find_map(|level| {
+                let epsilon = set_at(Param::Epsilon, level).then_some(Indirect::Epsilon(values.epsilon));
+                epsilon.or(set_at(Param::Bounces, level).then_some(Indirect::Bounces(values.bounces)))
+            })
+            .unwrap_or(DEFAULT_INDIRECT);
+        // The model not chosen was not used: its value is not said to come from anywhere.
+        match indirect {
+            Indirect::Epsilon(_) => origins.remove(&Param::Bounces),
+            Indirect::Bounces(_) => origins.remove(&Param::Epsilon),
         };
-        let mut pick = |param: Param, flag: bool, from_scene: bool| {
-            if flag {
-                origins.insert(param, Origin::Flag);
-            } else if from_scene {
-                origins.insert(param, scene_origin.clone());
-            }
-        };
-        macro_rules! resolve {
-            ($field:ident, $param:expr, $default:expr) => {{
-                pick($param, flags.$field.is_some(), scene.$field.is_some());
-                flags.$field.or(scene.$field).unwrap_or($default)
-            }};
-        }
-        let estimator_kind = resolve!(estimator, Param::Estimator, DEFAULT_ESTIMATOR);
-        let shape = resolve!(sensor, Param::Sensor, DEFAULT_SENSOR);
-        let fov = resolve!(fov_deg, Param::Fov, DEFAULT_FOV_DEG);
-        let background = Vec3::from(resolve!(background, Param::Background, [0.0; 3]));
-        let sensor_size = resolve!(sensor_size, Param::SensorSize, DEFAULT_SENSOR_SIZE.for_estimator(estimator_kind));
-        let tile = resolve!(tile, Param::Tile, DEFAULT_TILE);
-        let dradiance = resolve!(dradiance, Param::Dradiance, DEFAULT_DRADIANCE);
-        let filter_radius =
-            resolve!(filter_radius, Param::FilterRadius, DEFAULT_FILTER_RADIUS.for_estimator(estimator_kind));
-        let indirect_filter_radius =
-            resolve!(indirect_filter_radius, Param::IndirectFilterRadius, DEFAULT_INDIRECT_FILTER_RADIUS);
-        let cache_resolution = resolve!(cache_resolution, Param::CacheResolution, DEFAULT_CACHE_RESOLUTION);
-        let cache_sensor_size = resolve!(cache_sensor_size, Param::CacheSensorSize, DEFAULT_CACHE_SENSOR_SIZE);
-        let exposure = resolve!(exposure, Param::Exposure, DEFAULT_EXPOSURE);
-        let aa = resolve!(aa, Param::Aa, Antialiasing::default());
-        let sensor = SensorKind::new(shape, fov);
-        let params = Self {
-            estimator_kind,
-            estimator: EstimatorParams { sensor, indirect, background },
-            sensor_size,
-            tile,
-            dradiance,
-            filter_radius,
-            indirect_filter_radius,
-            cache_resolution,
-            cache_sensor_size,
-            exposure,
-            aa,
-            origins,
-        };
-        if let Some(problem) = sensor.size_problem(sensor_size, u32::MAX) {
+        let sensor = SensorKind::new(values.sensor, values.fov_deg);
+        let estimator = EstimatorParams { sensor, indirect, background: Vec3::from(values.background) };
+        let params = Self { values, estimator, origins };
+        if let Some(problem) = sensor.size_problem(params.values.sensor_size, u32::MAX) {
             return Err(params.attribute(ParamError::new(Param::SensorSize, problem)));
         }
-        if let Some(problem) = sensor.size_problem(cache_sensor_size, u32::MAX) {
+        if let Some(problem) = sensor.size_problem(params.values.cache_sensor_size, u32::MAX) {
             return Err(params.attribute(ParamError::new(Param::CacheSensorSize, problem)));
         }
         Ok(params)
@@ -240,14 +137,15 @@ impl RenderParams {
 
     /// The per-render part.
     pub fn frame(&self) -> FrameParams {
+        let v = &self.values;
         FrameParams {
             indirect: self.estimator.indirect,
             background: self.estimator.background,
-            tile: self.tile,
-            dradiance: self.dradiance,
-            filter_radius: self.filter_radius,
-            indirect_filter_radius: self.indirect_filter_radius,
-            aa: self.aa,
+            tile: v.tile,
+            dradiance: v.dradiance,
+            filter_radius: v.filter_radius,
+            indirect_filter_radius: v.indirect_filter_radius,
+            aa: v.aa,
         }
     }
 
@@ -309,14 +207,15 @@ mod tests {
         let flags = Overrides { epsilon: Some(0.25), ..Default::default() };
         let path = Path::new("room.toml");
         let p = RenderParams::resolve(Some((path, &scene)), &flags).unwrap();
-        assert_eq!(
-            (p.estimator.indirect, p.tile, p.sensor_size),
-            (Indirect::Epsilon(0.25), 8, DEFAULT_SENSOR_SIZE.exact)
-        );
+        assert_eq!((p.estimator.indirect, p.values.tile, p.values.sensor_size), (Indirect::Epsilon(0.25), 8, 32));
         let paper =
             RenderParams::resolve(None, &Overrides { estimator: Some(EstimatorKind::Paper), ..Default::default() });
         let paper = paper.unwrap();
-        assert_eq!((paper.sensor_size, paper.filter_radius), (256, 2), "the paper's estimator keeps its defaults");
+        assert_eq!(
+            (paper.values.sensor_size, paper.values.filter_radius),
+            (256, 2),
+            "the paper's estimator keeps its defaults"
+        );
         assert_eq!(p.estimator.sensor, SensorKind::Hemicube);
         assert_eq!(p.origin(Param::Epsilon), Origin::Flag);
         assert_eq!(p.origin(Param::Tile), Origin::SceneFile(path.into()));

@@ -89,7 +89,7 @@ impl CacheConfig {
 
     /// The cache `params` ask for: with global illumination, of their resolution and sensor size.
     pub fn for_params(params: &RenderParams) -> Option<Self> {
-        let (resolution, sensor_size) = (params.cache_resolution, params.cache_sensor_size);
+        let (resolution, sensor_size) = (params.values.cache_resolution, params.values.cache_sensor_size);
         params.estimator.indirect.bounces().map(|_| Self::new(resolution, sensor_size))
     }
 }

@@ -224,7 +224,7 @@ impl Setup {
     /// What `sensorlight render` renders with at the resolved parameters `p`.
     pub fn of(p: &RenderParams) -> Self {
         let cache = CacheConfig::for_params(p);
-        Self { kind: p.estimator_kind, estimator: p.estimator, rd: p.sensor_size, frame: p.frame(), cache }
+        Self { kind: p.values.estimator, estimator: p.estimator, rd: p.values.sensor_size, frame: p.frame(), cache }
     }
 }
 
