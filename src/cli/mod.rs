@@ -11,6 +11,7 @@ macro_rules! say {
 
 mod args;
 mod bench;
+mod cache;
 mod compare;
 mod counter;
 mod devices;
@@ -59,6 +60,8 @@ enum Command {
     Devices,
     /// Render a scene to an EXR.
     Render(render::RenderArgs),
+    /// Solve the radiance cache once and write it to a file that `render --cache` and `view --cache` read.
+    Cache(cache::CacheArgs),
     /// Compute the CPU reference image of the same estimator by ray casting (no GPU needed).
     Reference(reference::ReferenceArgs),
     /// Compare an image with a reference image: relative RMSE, mean error and bias over lit pixels.
@@ -80,6 +83,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Devices => devices::run(),
         Command::Render(args) => render::run(args),
+        Command::Cache(args) => cache::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench::run(args),

@@ -41,6 +41,10 @@ pub struct RenderArgs {
     stats_json: Option<PathBuf>,
     #[command(flatten)]
     engine: EngineFlags,
+    /// Read the radiance cache from this file (`sensorlight cache`) instead of solving it; refused, naming
+    /// what differs, where it was solved for another scene or other settings
+    #[arg(long, value_name = "FILE")]
+    cache: Option<PathBuf>,
     /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
     /// the render ends
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -72,14 +76,19 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
          written beside it)",
         args.output.display()
     );
-    outputs.check(&extra, &[&args.scene])?;
+    let mut inputs = vec![args.scene.as_path()];
+    inputs.extend(args.cache.as_deref());
+    outputs.check(&extra, &inputs)?;
     let size = (args.look.image.width, args.look.image.height);
     let (scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
+    let cache_file = args.cache.as_deref().map(|path| super::cache::read(path, &scene, &params)).transpose()?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
     // Again with the mesh and its materials, known now.
-    outputs.check(&extra, &scene.input_paths())?;
+    let mut inputs = scene.input_paths();
+    inputs.extend(args.cache.as_deref());
+    outputs.check(&extra, &inputs)?;
     let size = args.look.image.size(&scene)?;
     // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
     // and every staged output.
@@ -104,6 +113,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             }
         };
         let mut renderer = super::build_renderer(device, (&scene, &params), &args.engine, &mut cache, &mut report)?;
+        if let (Some(file), Some(path)) = (&cache_file, &args.cache) {
+            super::cache::apply(&mut renderer, file, &params, path)?;
+        }
         cancel.check()?;
         if let Some(&(_, t)) = measured.iter().find(|(kind, _)| *kind == renderer.strategy()) {
             progress.probe_measured(t);

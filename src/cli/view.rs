@@ -8,6 +8,7 @@ use std::sync::Arc;
 use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 use sensorlight::cancel::{Cancel, Reason};
+use sensorlight::gi::file::CacheFile;
 use sensorlight::output::atomic;
 use sensorlight::params::RenderParams;
 use sensorlight::renderer::{RenderOutput, Renderer};
@@ -37,6 +38,9 @@ pub struct ViewArgs {
     engine: EngineFlags,
     #[arg(long, value_name = "FILE", help = script_help())]
     script: Option<PathBuf>,
+    /// Read the radiance cache from this file (`sensorlight cache`) instead of solving it
+    #[arg(long, value_name = "FILE")]
+    cache: Option<PathBuf>,
     /// Say each camera move's time to its first picture, and their median when the window closes
     #[arg(long)]
     timings: bool,
@@ -66,7 +70,10 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
     }
-    ImageOutputs::new(&args.output, true)?.check(&[], &scene.input_paths())?;
+    let cache_file = args.cache.as_deref().map(|path| super::cache::read(path, &scene, &params)).transpose()?;
+    let mut inputs = scene.input_paths();
+    inputs.extend(args.cache.as_deref());
+    ImageOutputs::new(&args.output, true)?.check(&[], &inputs)?;
     let size = args.look.image.size(&scene)?;
     let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
     let name = args.scene.file_name().map_or_else(|| args.scene.display().to_string(), |n| n.to_string_lossy().into());
@@ -80,7 +87,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         script,
         timings: args.timings,
     };
-    let mut host = CliHost { args: &args, params: &params, inputs: scene.input_paths(), cancel, log: None };
+    let mut host = CliHost { args: &args, params: &params, inputs, cache_file, cancel, log: None };
     let result = viewer::run(setup, &mut host);
     match host.log {
         Some(log) => super::validated(&log, result),
@@ -106,6 +113,8 @@ struct CliHost<'a> {
     args: &'a ViewArgs,
     params: &'a RenderParams,
     inputs: Vec<&'a Path>,
+    /// `--cache`'s solution, checked against the scene.
+    cache_file: Option<CacheFile>,
     cancel: Cancel,
     /// The device's validation log, once it is open.
     log: Option<Arc<ValidationLog>>,
@@ -129,7 +138,12 @@ impl ViewHost for CliHost<'_> {
                 sensorlight::errln!("{text}");
             }
         };
-        super::build_renderer(device, (scene, self.params), &self.args.engine, &mut cache, &mut report)
+        let mut renderer =
+            super::build_renderer(device, (scene, self.params), &self.args.engine, &mut cache, &mut report)?;
+        if let (Some(file), Some(path)) = (&self.cache_file, &self.args.cache) {
+            super::cache::apply(&mut renderer, file, self.params, path)?;
+        }
+        Ok(renderer)
     }
 
     fn exposure(&self, output: &RenderOutput) -> Option<f32> {

@@ -15,6 +15,7 @@
 //! apart, which is where grids leak light.
 
 pub mod entries;
+pub mod file;
 pub mod grid;
 pub mod polygon;
 pub mod reach;

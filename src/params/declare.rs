@@ -163,6 +163,13 @@ macro_rules! parameters {
         }
 
         impl Values {
+            /// `param`'s value as its flag takes it.
+            pub fn show(&self, param: Param) -> String {
+                match param {
+                    $(Param::$name => $crate::params::flags::FlagValue::show(&self.$key),)*
+                }
+            }
+
             /// `flags` over `scene` (from `scene_origin`) over the defaults for the estimator `kind`,
             /// recording in `origins` where each value that was set came from.
             pub(super) fn resolve(

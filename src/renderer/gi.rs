@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::batch::{BatchRunner, Sensed, SensedMaps};
 use super::{Phase, Progress};
@@ -50,7 +50,7 @@ pub struct CacheLevel {
 }
 
 /// What the bounces did, for the statistics.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct GiStats {
     /// Bounces sensed.
     pub bounces: u32,
@@ -89,7 +89,7 @@ pub struct GiStats {
 }
 
 /// How the radiance cache's bounces after the first were computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LaterBounces {
     /// Sparse products with the transport's rows, read from the first bounce's maps: its weights and bytes.
@@ -406,6 +406,26 @@ pub(super) fn solve(
 }
 
 impl super::Renderer {
+    /// Takes `values` (a cache file's: one per entry, then the surface sides' fallbacks) as the radiance
+    /// cache's solution for `frame`'s light, solved as `stats` says, in place of solving it: every later
+    /// render with that light reads it ([`Renderer::keep_cache`]). An error where the renderer has no cache
+    /// or `values` is not the size of its cache.
+    pub fn use_cache(&mut self, values: &[Vec4], frame: &FrameParams, stats: GiStats) -> Result<()> {
+        let cache = self.cache().context(
+            "this render has no radiance cache to read (it computes no global illumination: --bounces 0 or --epsilon)",
+        )?;
+        anyhow::ensure!(
+            values.len() == cache.values_len(),
+            "the file holds {} values; this scene's cache has {}",
+            values.len(),
+            cache.values_len()
+        );
+        transfer::write_buffer(&self.device, &self.scene.cache.values, values).context("upload the radiance cache")?;
+        self.cache_solved = true;
+        self.kept = Some(Some((frame.indirect, frame.background, stats)));
+        Ok(())
+    }
+
     /// Senses the radiance cache's bounces for `frame`'s global illumination, leaving the cache for the
     /// sensor maps that follow ([`Renderer::render`] does this itself; [`Renderer::sense_at`] then sees it).
     /// An error if the renderer was built without a cache.
