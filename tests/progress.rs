@@ -55,6 +55,7 @@ fn progress_sees_every_phase_round_and_snapshot() {
         indirect_filter_radius: 0,
         // The previews are of the pixel centres; the final image's supersampled edges are not previewed.
         aa: sensorlight::params::Antialiasing::Off,
+        region: None,
     };
     let recorder = Recorder::default();
     let output = common::gpu(|device| {

@@ -20,6 +20,7 @@ mod progress;
 mod reference;
 mod render;
 mod say;
+mod tiles;
 mod view;
 
 use std::path::{Path, PathBuf};
@@ -62,6 +63,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Solve the radiance cache once and write it to a file that `render --cache` and `view --cache` read.
     Cache(cache::CacheArgs),
+    /// Join the tiles of `render --image-tile I/N` into the image the single render writes, bit for bit.
+    Assemble(tiles::AssembleArgs),
     /// Compute the CPU reference image of the same estimator by ray casting (no GPU needed).
     Reference(reference::ReferenceArgs),
     /// Compare an image with a reference image: relative RMSE, mean error and bias over lit pixels.
@@ -84,6 +87,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Devices => devices::run(),
         Command::Render(args) => render::run(args),
         Command::Cache(args) => cache::run(args),
+        Command::Assemble(args) => tiles::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench::run(args),
@@ -367,36 +371,84 @@ fn gbuffer_aovs(exr: ExrImage, g: &GBufferData, eye: glam::Vec3) -> ExrImage {
 /// automatic exposure instead: the image would be mostly clipped (a bright lamp, an exposure never set).
 const CLIPPED_AT_MOST: f64 = 0.01;
 
-/// The PNG's exposure in stops, and, when it was chosen automatically, what the summary says of it.
-/// `--exposure` or a scene file's `exposure` where set. Else, for a bare mesh (`input` an OBJ or glTF), the
-/// exposure that maps the 99th percentile of its lit pixels' luminance to white (`png::auto_exposure`; lit:
-/// a surface, not an emitter's front, above 0), so that a dim mesh's PNG is not black; for a scene file the
-/// default, unless more than [`CLIPPED_AT_MOST`] of its lit pixels would clip, then the automatic one.
-fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, Option<String>) {
-    use sensorlight::output::png;
-    use sensorlight::params::{Origin, Param};
-    if params.origin(Param::Exposure) != Origin::Default {
-        return (params.values.exposure, None);
-    }
-    let lit: Vec<f32> = (image.iter().zip(&g.surface).zip(&g.emission))
-        .filter(|((_, id), le)| **id != sensorlight::scene::NO_SURFACE && le.truncate() == glam::Vec3::ZERO)
-        .map(|((p, _), _)| png::luminance(*p))
-        .filter(|&y| y > 0.0 && y.is_finite())
-        .collect();
-    let clipped =
-        lit.iter().filter(|&&y| y * params.values.exposure.exp2() > 1.0).count() as f64 / lit.len().max(1) as f64;
-    let why = if FileKind::of(input).is_mesh() {
-        String::new()
-    } else if clipped > CLIPPED_AT_MOST {
-        format!("at the default {}, {:.0} % of lit pixels would clip white; ", params.values.exposure, 100.0 * clipped)
-    } else {
-        return (params.values.exposure, None);
-    };
-    match png::auto_exposure(lit) {
-        Some(stops) => {
-            let sets = if why.is_empty() { "--exposure" } else { "the scene file's `exposure` or --exposure" };
-            (stops, Some(format!("exposure {stops:.1} (auto: {why}99th percentile of lit pixels; {sets} sets it)")))
+/// How the PNG's exposure is chosen: `--exposure` or a scene file's `exposure` where set (`Set`). Else, for
+/// a bare mesh (`Mesh`), the exposure that maps the 99th percentile of its lit pixels' luminance to white
+/// (`png::auto_exposure`; lit: a surface, not an emitter's front, above 0), so that a dim mesh's PNG is not
+/// black; for a scene file (`Default`) the default, unless more than [`CLIPPED_AT_MOST`] of its lit pixels
+/// would clip, then the automatic one. A tile records its rule, so that `assemble` chooses as `render` does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ExposureRule {
+    Set(f32),
+    Default(f32),
+    Mesh(f32),
+}
+
+impl ExposureRule {
+    fn of(params: &RenderParams, input: &Path) -> Self {
+        use sensorlight::params::{Origin, Param};
+        let stops = params.values.exposure;
+        if params.origin(Param::Exposure) != Origin::Default {
+            Self::Set(stops)
+        } else if FileKind::of(input).is_mesh() {
+            Self::Mesh(stops)
+        } else {
+            Self::Default(stops)
         }
-        None => (params.values.exposure, None),
     }
+
+    /// As a tile's header says it: `set 1.5`, `default 0`, `mesh 0`.
+    fn text(self) -> String {
+        match self {
+            Self::Set(x) => format!("set {x}"),
+            Self::Default(x) => format!("default {x}"),
+            Self::Mesh(x) => format!("mesh {x}"),
+        }
+    }
+
+    fn parse(text: &str) -> Option<Self> {
+        let (kind, stops) = text.split_once(' ')?;
+        let stops: f32 = stops.parse().ok()?;
+        match kind {
+            "set" => Some(Self::Set(stops)),
+            "default" => Some(Self::Default(stops)),
+            "mesh" => Some(Self::Mesh(stops)),
+            _ => None,
+        }
+    }
+
+    /// The exposure in stops for `image`, whose pixel i shows a surface (not an emitter's front) where
+    /// `lit(i)`, and, when it was chosen automatically, what the summary says of it.
+    fn choose(self, image: &[glam::Vec4], lit: impl Fn(usize) -> bool) -> (f32, Option<String>) {
+        use sensorlight::output::png;
+        let stops = match self {
+            Self::Set(x) => return (x, None),
+            Self::Default(x) | Self::Mesh(x) => x,
+        };
+        let lit: Vec<f32> = (image.iter().enumerate())
+            .filter(|(i, _)| lit(*i))
+            .map(|(_, p)| png::luminance(*p))
+            .filter(|&y| y > 0.0 && y.is_finite())
+            .collect();
+        let clipped = lit.iter().filter(|&&y| y * stops.exp2() > 1.0).count() as f64 / lit.len().max(1) as f64;
+        let why = match self {
+            Self::Mesh(_) => String::new(),
+            _ if clipped > CLIPPED_AT_MOST => {
+                format!("at the default {stops}, {:.0} % of lit pixels would clip white; ", 100.0 * clipped)
+            }
+            _ => return (stops, None),
+        };
+        match png::auto_exposure(lit) {
+            Some(auto) => {
+                let sets = if why.is_empty() { "--exposure" } else { "the scene file's `exposure` or --exposure" };
+                (auto, Some(format!("exposure {auto:.1} (auto: {why}99th percentile of lit pixels; {sets} sets it)")))
+            }
+            None => (stops, None),
+        }
+    }
+}
+
+/// The PNG's exposure in stops for `params` and `input` ([`ExposureRule`]) over `image` and its G-buffer.
+fn png_exposure(params: &RenderParams, input: &Path, image: &[glam::Vec4], g: &GBufferData) -> (f32, Option<String>) {
+    let lit = |i: usize| g.surface[i] != sensorlight::scene::NO_SURFACE && g.emission[i].truncate() == glam::Vec3::ZERO;
+    ExposureRule::of(params, input).choose(image, lit)
 }

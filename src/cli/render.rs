@@ -9,7 +9,7 @@ use clap::Args;
 use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
-use sensorlight::params::{Antialiasing, RenderParams};
+use sensorlight::params::{Antialiasing, FrameParams, RenderParams};
 use sensorlight::renderer::{LaterBounces, RenderOutput, RenderStats};
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event};
@@ -45,6 +45,11 @@ pub struct RenderArgs {
     /// what differs, where it was solved for another scene or other settings
     #[arg(long, value_name = "FILE")]
     cache: Option<PathBuf>,
+    /// Render only tile I of N (from 1; --tile is the refinement's grid step): the band of rows (I − 1)·H/N .. I·H/N, every AOV included, into an
+    /// EXR whose data window says where it lies (no PNG); `sensorlight assemble` joins the N tiles into the
+    /// image this render would write without --tile, bit for bit (give every tile the same flags)
+    #[arg(long, value_name = "I/N")]
+    image_tile: Option<super::tiles::TileSpec>,
     /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
     /// the render ends
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -69,7 +74,14 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     if let Some(path) = &args.write_scene {
         atomic::check_extension(path, "toml")?;
     }
-    let outputs = super::ImageOutputs::new(&args.output, args.look.image.write_png())?;
+    // A tile's PNG would need the whole image's exposure: `assemble` writes it.
+    ensure!(
+        args.image_tile.is_none() || super::OutputKind::of(&args.output)? == super::OutputKind::Exr,
+        "--image-tile writes an EXR (its PNG is `assemble`'s), and -o {} asks for a PNG alone; name an .exr output",
+        args.output.display()
+    );
+    let outputs = super::ImageOutputs::new(&args.output, args.look.image.write_png() && args.image_tile.is_none())?;
+
     ensure!(
         !args.aovs || outputs.exr.is_some(),
         "--aovs writes its layers into the EXR, and -o {} asks for a PNG alone; name an .exr output (its PNG is \
@@ -90,6 +102,9 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     inputs.extend(args.cache.as_deref());
     outputs.check(&extra, &inputs)?;
     let size = args.look.image.size(&scene)?;
+    if let Some(tile) = args.image_tile {
+        tile.rows(size)?;
+    }
     // From here on Ctrl-C (or SIGTERM) stops the render between batches, and the way out removes the preview
     // and every staged output.
     let cancel = Cancel::on_signals().context("cannot handle SIGINT and SIGTERM")?;
@@ -126,7 +141,11 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         if let Some(probe) = renderer.detail_probe() {
             progress.say(&detail_line(probe, scene.mesh.triangles.len()));
         }
-        let output = renderer.render(size, &params.frame(), &progress)?;
+        let frame = match args.image_tile {
+            Some(tile) => FrameParams { region: Some(tile.region(size)?), ..params.frame() },
+            None => params.frame(),
+        };
+        let output = renderer.render(size, &frame, &progress)?;
         progress.complete();
         progress.finish();
         cancel.check()?;
@@ -321,7 +340,16 @@ fn write_outputs(
     }
     // Every output or none: all are staged, then renamed together.
     let mut files = atomic::Outputs::new();
-    stage_images(&mut files, outputs, out, (exposure, args.aovs), scene.camera.eye)?;
+    match (args.image_tile, &outputs.exr) {
+        (Some(tile), Some(path)) => {
+            let id = super::tiles::render_id(scene, params, out.size);
+            let rule = super::ExposureRule::of(params, &args.scene);
+            let exr =
+                super::tiles::tile_exr(image_exr(out, true, scene.camera.eye), tile, out.size, (&id, rule, args.aovs))?;
+            exr.stage(&mut files, path)?;
+        }
+        _ => stage_images(&mut files, outputs, out, (exposure, args.aovs), scene.camera.eye)?,
+    }
     if let Some(path) = &args.write_scene {
         // The scene file renders as the mesh did: its automatic exposure written down.
         let mut render = scene.render.clone();
@@ -346,6 +374,26 @@ fn write_outputs(
     Ok(())
 }
 
+/// The EXR of `out`: the image, and with `aovs` R, how each pixel was obtained and the G-buffer's layers.
+fn image_exr(out: &RenderOutput, aovs: bool, eye: glam::Vec3) -> ExrImage {
+    let exr = ExrImage::new(out.size.width, out.size.height).rgba("", &out.image);
+    if !aovs {
+        return exr;
+    }
+    let mask = out.radiance.iter().map(|r| match r.w {
+        w if w == radiance_state::SENSED => 1.0,
+        w if w == radiance_state::INTERPOLATED => 0.5,
+        _ => 0.0,
+    });
+    let mut supersampled = vec![0.0; out.radiance.len()];
+    for &i in &out.supersampled {
+        supersampled[i as usize] = 1.0;
+    }
+    let with_r =
+        (exr.rgb("radiance", &out.radiance)).scalar("sensor_mask", mask.collect()).scalar("supersampled", supersampled);
+    super::gbuffer_aovs(with_r, &out.gbuffer, eye)
+}
+
 /// Stages the EXR (with the AOVs if `aovs`) and the PNG at `exposure` that `outputs` names among `files`:
 /// `render`'s images, and the viewer's saves.
 pub(super) fn stage_images(
@@ -357,23 +405,7 @@ pub(super) fn stage_images(
 ) -> Result<()> {
     let size = out.size;
     if let Some(path) = &outputs.exr {
-        let mut exr = ExrImage::new(size.width, size.height).rgba("", &out.image);
-        if aovs {
-            let mask = out.radiance.iter().map(|r| match r.w {
-                w if w == radiance_state::SENSED => 1.0,
-                w if w == radiance_state::INTERPOLATED => 0.5,
-                _ => 0.0,
-            });
-            let mut supersampled = vec![0.0; out.radiance.len()];
-            for &i in &out.supersampled {
-                supersampled[i as usize] = 1.0;
-            }
-            let with_r = (exr.rgb("radiance", &out.radiance))
-                .scalar("sensor_mask", mask.collect())
-                .scalar("supersampled", supersampled);
-            exr = super::gbuffer_aovs(with_r, &out.gbuffer, eye);
-        }
-        exr.stage(files, path)?;
+        image_exr(out, aovs, eye).stage(files, path)?;
     }
     if let Some(path) = &outputs.png {
         png::stage(files, path, (size.width, size.height), &out.image, exposure)?;

@@ -182,28 +182,34 @@ impl CacheFile {
 }
 
 /// FNV-1a, 64 bits: a hash that is the same on every run and machine (std's is not promised to be).
-struct Fnv(u64);
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 impl Fnv {
-    fn new() -> Self {
+    pub fn new() -> Self {
         Self(0xcbf2_9ce4_8422_2325)
     }
 
-    fn bytes(&mut self, bytes: &[u8]) {
+    pub fn bytes(&mut self, bytes: &[u8]) {
         for &b in bytes {
             self.0 = (self.0 ^ b as u64).wrapping_mul(0x0100_0000_01b3);
         }
     }
 
-    fn floats(&mut self, floats: impl IntoIterator<Item = f32>) {
+    pub fn floats(&mut self, floats: impl IntoIterator<Item = f32>) {
         floats.into_iter().for_each(|f| self.bytes(&f.to_bits().to_le_bytes()));
     }
 
-    fn text(&mut self, text: &str) {
+    pub fn text(&mut self, text: &str) {
         self.bytes(text.as_bytes());
     }
 
-    fn hex(&self) -> String {
+    pub fn hex(&self) -> String {
         let mut s = String::new();
         write!(s, "{:016x}", self.0).unwrap();
         s

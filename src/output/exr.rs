@@ -14,11 +14,49 @@ pub struct ExrImage {
     width: usize,
     height: usize,
     channels: Vec<(String, Vec<f32>)>,
+    /// A tile of a larger image: the image's size and where the data's top-left pixel lies in it (the
+    /// data window; the display window is the whole image).
+    window: Option<Window>,
+    /// Text attributes in the header (sorted by name when written).
+    attributes: Vec<(String, String)>,
+}
+
+/// Where a tile's pixels lie in the whole image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub width: usize,
+    pub height: usize,
+    pub x: usize,
+    pub y: usize,
 }
 
 impl ExrImage {
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width: width as usize, height: height as usize, channels: Vec::new() }
+        Self {
+            width: width as usize,
+            height: height as usize,
+            channels: Vec::new(),
+            window: None,
+            attributes: Vec::new(),
+        }
+    }
+
+    /// Only rows `y0..y1` of the image, written as a tile of it: the data window says where they belong.
+    pub fn rows(mut self, y0: usize, y1: usize) -> Self {
+        assert!(y0 < y1 && y1 <= self.height && self.window.is_none(), "rows {y0}..{y1} of {}", self.height);
+        let w = self.width;
+        for (_, data) in &mut self.channels {
+            *data = data[y0 * w..y1 * w].to_vec();
+        }
+        self.window = Some(Window { width: w, height: self.height, x: 0, y: y0 });
+        self.height = y1 - y0;
+        self
+    }
+
+    /// A text attribute in the header.
+    pub fn attribute(mut self, name: &str, value: &str) -> Self {
+        self.attributes.push((name.to_owned(), value.to_owned()));
+        self
     }
 
     /// Adds the rgb of `pixels` as `R`, `G`, `B` (empty `layer`) or `layer.R`, `layer.G`, `layer.B`.
@@ -65,7 +103,16 @@ impl ExrImage {
             .map(|(name, data)| AnyChannel::new(name.as_str(), FlatSamples::F32(data)))
             .collect();
         let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
-        let image = Image::from_encoded_channels((self.width, self.height), encoding, AnyChannels::sort(channels));
+        let mut image = Image::from_encoded_channels((self.width, self.height), encoding, AnyChannels::sort(channels));
+        if let Some(window) = self.window {
+            image.layer_data.attributes.layer_position = Vec2(window.x as i32, window.y as i32);
+            image.attributes.display_window = IntegerBounds::new((0, 0), (window.width, window.height));
+        }
+        let mut attributes = self.attributes;
+        attributes.sort();
+        for (name, value) in attributes {
+            image.attributes.other.insert(Text::from(name.as_str()), AttributeValue::Text(Text::from(value.as_str())));
+        }
         image.write().to_buffered(w)?;
         Ok(())
     }
@@ -107,4 +154,45 @@ pub fn read_channels(path: &Path, names: &[&str]) -> Result<(usize, usize, Vec<V
         out.push(std::mem::take(&mut channels[i].1));
     }
     Ok((w, h, out))
+}
+
+/// A tile as [`ExrImage::rows`] wrote it: where it lies, its text attributes and its channels.
+pub struct Tile {
+    pub window: Window,
+    /// Its data's size.
+    pub width: usize,
+    pub height: usize,
+    pub attributes: std::collections::BTreeMap<String, String>,
+    pub channels: NamedChannels,
+}
+
+/// Reads an EXR as a tile of an image (a whole image is its own one tile).
+pub fn read_tile(path: &Path) -> Result<Tile> {
+    let image =
+        read_all_flat_layers_from_file(path).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?;
+    let layer = image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: no layers", path.display()))?;
+    let (width, height) = (layer.size.width(), layer.size.height());
+    let display = image.attributes.display_window;
+    let position = layer.attributes.layer_position - display.position;
+    ensure!(
+        position.x() >= 0 && position.y() >= 0,
+        "{}: its data window starts outside its display window",
+        path.display()
+    );
+    let window = Window {
+        width: display.size.width(),
+        height: display.size.height(),
+        x: position.x() as usize,
+        y: position.y() as usize,
+    };
+    // Attributes the crate does not know are kept with the layer when read (a single part's header is both).
+    let attributes = (image.attributes.other.iter().chain(&layer.attributes.other))
+        .filter_map(|(name, value)| match value {
+            AttributeValue::Text(text) => Some((name.to_string(), text.to_string())),
+            _ => None,
+        })
+        .collect();
+    let channels =
+        layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
+    Ok(Tile { window, width, height, attributes, channels })
 }

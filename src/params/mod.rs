@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use crate::sensors::SensorKind;
 pub use crate::sensors::SensorShape;
+pub use crate::sensors::refine::Region;
 
 #[macro_use]
 pub(crate) mod declare;
@@ -65,6 +66,11 @@ pub struct FrameParams {
     pub indirect_filter_radius: u32,
     /// Whether a pixel is its centre or its square.
     pub aa: Antialiasing,
+    /// Only these pixels need be right (a tile): the sensors go only where the refinement's quads meet
+    /// them grown by the margin the filters and the supersampling read across, but for the first grid,
+    /// sensed everywhere (its brightest R sets the refinement's dark floor), so that each pixel of the
+    /// region is what the whole image's render gives it. `None`: the whole image.
+    pub region: Option<Region>,
 }
 
 impl FrameParams {
@@ -79,6 +85,7 @@ impl FrameParams {
             filter_radius: 0,
             indirect_filter_radius: 0,
             aa: Antialiasing::Off,
+            region: None,
         }
     }
 }
@@ -146,6 +153,7 @@ impl RenderParams {
             filter_radius: v.filter_radius,
             indirect_filter_radius: v.indirect_filter_radius,
             aa: v.aa,
+            region: None,
         }
     }
 

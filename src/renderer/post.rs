@@ -111,7 +111,9 @@ impl Renderer {
             for (&i, r) in plan.pixels.iter().zip(&resolved) {
                 seen[i as usize] = *r;
             }
-            let ends = supersample::plan(&self.host, &self.bvh, &g, &supersample::light_ends(&g, &seen, &plan.pixels));
+            let mut ends = supersample::light_ends(&g, &seen, &plan.pixels);
+            super::sensing::outside(rounds.region, size.width, &mut ends);
+            let ends = supersample::plan(&self.host, &self.bvh, &g, &ends);
             let (more, more_majorities) =
                 self.resolve_supersampled(&ends, (&g, targets), light, offsets, frame.background)?;
             (resolved, majorities) = ([resolved, more].concat(), [majorities, more_majorities].concat());

@@ -14,7 +14,7 @@ use super::targets::Targets;
 use super::{Progress, Renderer, RoundDone, Snapshot};
 use crate::gbuffer::GBufferData;
 use crate::gpu_types::MAX_GROUPS;
-use crate::params::{Antialiasing, FrameParams};
+use crate::params::{Antialiasing, FrameParams, Region};
 use crate::sensors::hints;
 use crate::sensors::refine::{Refinement, Visibility};
 use crate::supersample;
@@ -33,6 +33,8 @@ pub(super) struct Rounds {
     pub(super) bits: Vec<u64>,
     /// The pixels that take sub-pixel samples, and what their samples see.
     pub(super) plan: supersample::Plan,
+    /// The pixels that must be right: the frame's region grown by [`REGION_MARGIN`] (`None`: all).
+    pub(super) region: Option<Region>,
     /// Sensors, and bytes read back, per round.
     pub(super) per_round: Vec<u64>,
     pub(super) readback_per_round: Vec<u64>,
@@ -40,6 +42,10 @@ pub(super) struct Rounds {
     pub(super) refine_time: Duration,
     pub(super) supersample_time: Duration,
 }
+
+/// How far beyond a frame's region (a tile) its pixels are made right, besides the filters' radius: the
+/// supersampling's neighbourhoods (detection, donors, the light's ends), each a pixel, read across it.
+pub const REGION_MARGIN: u32 = 8;
 
 impl Renderer {
     /// Senses the image of G-buffer `g` into `targets`' maps, round by round; previews and progress through
@@ -55,6 +61,9 @@ impl Renderer {
         let pixels = g.size.width as usize * g.size.height as usize;
         let ck = self.ck(frame);
         let (refinement, mut pending) = Refinement::start(g, frame.tile, frame.dradiance);
+        let margin = REGION_MARGIN + frame.filter_radius.max(frame.indirect_filter_radius);
+        let region = frame.region.map(|r| r.grown(margin, (g.size.width, g.size.height)));
+        let refinement = refinement.within(region);
         let t = Instant::now();
         let (bias, near) = self.offsets();
         let masks = self.light_points.as_ref().map(|points| hints::hints(&self.bvh, points, g, bias, near));
@@ -67,7 +76,8 @@ impl Renderer {
         let bits = self.light_points.as_ref().map(|_| hints::group_bits(&self.scene.lights)).unwrap_or_default();
         let plan = match frame.aa {
             Antialiasing::On => {
-                let flags = supersample::detect(&self.host, g, masks.as_deref().unwrap_or(&[]), &bits);
+                let mut flags = supersample::detect(&self.host, g, masks.as_deref().unwrap_or(&[]), &bits);
+                outside(region, g.size.width, &mut flags);
                 supersample::plan(&self.host, &self.bvh, g, &flags)
             }
             Antialiasing::Off => supersample::Plan::default(),
@@ -130,6 +140,7 @@ impl Renderer {
             });
         }
         Ok(Rounds {
+            region,
             visibility,
             refinement,
             exact_interpolation,
@@ -140,5 +151,14 @@ impl Renderer {
             refine_time,
             supersample_time,
         })
+    }
+}
+
+/// Clears the supersampling's flags of the pixels outside `region` (an image `width` wide): only the
+/// region's pixels must be right.
+pub(super) fn outside(region: Option<Region>, width: u32, flags: &mut [supersample::Flags]) {
+    if let Some(r) = region {
+        let inside = |i: usize| r.contains(i as u32 % width, i as u32 / width);
+        flags.iter_mut().enumerate().filter(|(i, _)| !inside(*i)).for_each(|(_, f)| *f = supersample::Flags::default());
     }
 }

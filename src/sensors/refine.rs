@@ -41,6 +41,37 @@ pub const REST_SHARE: f32 = 0.5;
 /// the first grid, so that black regions are not refined to the pixel on noise.
 pub const DARK_FLOOR: f32 = 1e-3;
 
+/// A rectangle of an image's pixels, `x0..x1` × `y0..y1` (ends excluded): the part of a render that must
+/// be right, a tile of a render split over processes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Region {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Region {
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+
+    /// Whether the closed rectangle `x0..=x1` × `y0..=y1` (a refinement quad's corners) meets it.
+    pub fn meets(&self, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> bool {
+        x1 >= self.x0 && x0 < self.x1 && y1 >= self.y0 && y0 < self.y1
+    }
+
+    /// Grown by `by` pixels on every side, within an image of `width` × `height`.
+    pub fn grown(self, by: u32, (width, height): (u32, u32)) -> Self {
+        Self {
+            x0: self.x0.saturating_sub(by),
+            y0: self.y0.saturating_sub(by),
+            x1: (self.x1 + by).min(width),
+            y1: (self.y1 + by).min(height),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Quad {
     x0: u32,
@@ -67,6 +98,8 @@ pub struct Refinement {
     active: Vec<Quad>,
     interpolated: Vec<GpuQuad>,
     floor: Option<f32>,
+    /// Where the quads are refined ([`Refinement::within`]); elsewhere they are left after the first grid.
+    region: Option<Region>,
 }
 
 impl Refinement {
@@ -99,6 +132,7 @@ impl Refinement {
             active,
             interpolated: Vec::new(),
             floor: None,
+            region: None,
         };
         let mut first = Vec::new();
         for &y in &ys {
@@ -114,6 +148,14 @@ impl Refinement {
     pub fn with_hints(mut self, hints: Vec<u64>) -> Self {
         debug_assert!(hints.len() == self.surface.len() || hints.is_empty());
         self.hints = hints;
+        self
+    }
+
+    /// Refines only the quads that meet `region` (a tile and its margin): the others are neither split nor
+    /// interpolated after the first grid, which is sensed everywhere so that the dark floor, and with it
+    /// every decision inside the region, is the whole image's.
+    pub fn within(mut self, region: Option<Region>) -> Self {
+        self.region = region;
         self
     }
 
@@ -152,6 +194,9 @@ impl Refinement {
         let mut next_quads = Vec::new();
         let mut next_sensors = Vec::new();
         for q in std::mem::take(&mut self.active) {
+            if self.region.is_some_and(|r| !r.meets((q.x0, q.y0), (q.x1, q.y1))) {
+                continue;
+            }
             if self.can_interpolate(q, (r, rest), visibility, floor) {
                 self.interpolated.push(self.owned(q));
                 continue;
