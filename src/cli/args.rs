@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context as _, Result, ensure};
-use clap::Args;
+use clap::{Args, ValueEnum as _};
 use glam::Vec3;
 use sensorlight::params::flags::{FlagSet, ParamFlags, parse_rgb, whole};
 use sensorlight::params::{Overrides, Param};
@@ -106,6 +106,33 @@ impl LookFlags {
     pub fn overrides(&self) -> Overrides {
         self.params.values.clone()
     }
+
+    /// The flags given, as a command line takes them: to pass them on to the processes of a job (paths made
+    /// absolute, for a job that runs elsewhere).
+    pub fn to_args(&self) -> Result<Vec<String>> {
+        let mut args = self.params.values.to_args();
+        let image = &self.image;
+        let numbers = [("--width", image.width), ("--height", image.height)];
+        args.extend(numbers.into_iter().filter_map(|(f, v)| v.map(|v| [f.to_owned(), v.to_string()])).flatten());
+        if image.no_png {
+            args.push("--no-png".into());
+        }
+        let l = &self.lights;
+        let xyz = |v: [f32; 3]| format!("{},{},{}", v[0], v[1], v[2]);
+        let lights = [
+            ("--sun", l.sun.map(xyz)),
+            ("--sun-irradiance", l.sun_irradiance.map(xyz)),
+            ("--sun-diameter", l.sun_diameter.map(|v| v.to_string())),
+            ("--sky-strength", l.sky_strength.map(|v| v.to_string())),
+            ("--sky-rotation", l.sky_rotation.map(|v| v.to_string())),
+        ];
+        args.extend(lights.into_iter().filter_map(|(f, v)| v.map(|v| [f.to_owned(), v])).flatten());
+        if let Some(sky) = &l.sky {
+            let path = sky.canonicalize().with_context(|| format!("--sky {}", sky.display()))?;
+            args.extend(["--sky".to_owned(), path.display().to_string()]);
+        }
+        Ok(args)
+    }
 }
 
 /// How the renderer runs on the device: which device, the batching strategy, batches in flight and their
@@ -126,6 +153,20 @@ pub struct EngineFlags {
     /// Device index from `sensorlight devices` [default: the best available]
     #[arg(long)]
     pub device: Option<usize>,
+}
+
+impl EngineFlags {
+    /// The flags given, as a command line takes them (not `--device`: a job's node has its own devices).
+    pub fn to_args(&self) -> Vec<String> {
+        let mut args = vec!["--in-flight".to_owned(), self.in_flight.to_string()];
+        if let Some(mib) = self.memory_budget {
+            args.extend(["--memory-budget".to_owned(), mib.to_string()]);
+        }
+        if let Some(value) = self.strategy.to_possible_value() {
+            args.extend(["--strategy".to_owned(), value.get_name().to_owned()]);
+        }
+        args
+    }
 }
 
 /// Output size and preview: shared by `render` and `reference`.

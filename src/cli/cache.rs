@@ -10,13 +10,12 @@ use clap::Args;
 use sensorlight::cancel::Cancel;
 use sensorlight::gi::file::{CacheFile, Fingerprint};
 use sensorlight::output::atomic;
-use sensorlight::params::flags::{FlagSet, ParamFlags};
-use sensorlight::params::{Param, RenderParams};
+use sensorlight::params::RenderParams;
 use sensorlight::renderer::{GiStats, Renderer};
 use sensorlight::scene::Scene;
 use sensorlight::strategy::Cache;
 
-use super::args::{EngineFlags, LightFlags};
+use super::args::{EngineFlags, LookFlags};
 use super::progress::RenderProgress;
 
 #[derive(Args)]
@@ -26,33 +25,18 @@ pub struct CacheArgs {
     /// The cache file to write (all or nothing); `render --cache FILE` and `view --cache FILE` read it
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
+    /// `render`'s flags, so that one list serves both; those that act on the camera's pixels alone (the
+    /// size, the refinement, the filters, the exposure) change nothing here
     #[command(flatten)]
-    params: ParamFlags<CacheParams>,
-    #[command(flatten)]
-    lights: LightFlags,
+    look: LookFlags,
     #[command(flatten)]
     engine: EngineFlags,
 }
 
-/// What the cache depends on of the parameters (the rest acts on the camera's pixels only).
-pub enum CacheParams {}
-
-impl FlagSet for CacheParams {
-    const PARAMS: &'static [Param] = &[
-        Param::Estimator,
-        Param::Sensor,
-        Param::Fov,
-        Param::Bounces,
-        Param::Background,
-        Param::SensorSize,
-        Param::CacheResolution,
-        Param::CacheSensorSize,
-    ];
-}
-
 pub fn run(args: CacheArgs) -> Result<ExitCode> {
     atomic::check_outputs(&[("-o", &args.output)], &[&args.scene])?;
-    let (scene, params) = super::load_input(&args.scene, &args.params.values, (None, None), &args.lights)?;
+    let size = (args.look.image.width, args.look.image.height);
+    let (scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
     atomic::check_outputs(&[("-o", &args.output)], &scene.input_paths())?;
     if params.estimator.indirect.bounces().is_none() {
         bail!(

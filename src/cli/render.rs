@@ -48,8 +48,16 @@ pub struct RenderArgs {
     /// Render only tile I of N (from 1; --tile is the refinement's grid step): the band of rows (I − 1)·H/N .. I·H/N, every AOV included, into an
     /// EXR whose data window says where it lies (no PNG); `sensorlight assemble` joins the N tiles into the
     /// image this render would write without --tile, bit for bit (give every tile the same flags)
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", conflicts_with = "frames")]
     image_tile: Option<super::tiles::TileSpec>,
+    /// Render frame K of the scene file's camera path ([path]: the camera at time K / fps), to OUT.####.exr
+    /// (OUT.0007.exr for frame 7) and its PNG
+    #[arg(long, value_name = "K", conflicts_with = "frames")]
+    frame: Option<u32>,
+    /// Render frames A to B (both included) of the camera path, each to OUT.####.exr and its PNG; one
+    /// radiance cache serves them all
+    #[arg(long, value_name = "A..B")]
+    frames: Option<FrameRange>,
     /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
     /// the render ends
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -80,7 +88,21 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         "--image-tile writes an EXR (its PNG is `assemble`'s), and -o {} asks for a PNG alone; name an .exr output",
         args.output.display()
     );
-    let outputs = super::ImageOutputs::new(&args.output, args.look.image.write_png() && args.image_tile.is_none())?;
+    let png = args.look.image.write_png() && args.image_tile.is_none();
+    let numbers: Vec<Option<u32>> = match (args.frame, args.frames) {
+        (Some(k), _) => vec![Some(k)],
+        (None, Some(range)) => (range.first..=range.last).map(Some).collect(),
+        (None, None) => vec![None],
+    };
+    let jobs = (numbers.iter())
+        .map(|&k| {
+            Ok((
+                k,
+                super::ImageOutputs::new(&k.map_or_else(|| args.output.clone(), |k| numbered(&args.output, k)), png)?,
+            ))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let outputs = &jobs[0].1;
 
     ensure!(
         !args.aovs || outputs.exr.is_some(),
@@ -90,9 +112,10 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     );
     let mut inputs = vec![args.scene.as_path()];
     inputs.extend(args.cache.as_deref());
-    outputs.check(&extra, &inputs)?;
+    jobs.iter().try_for_each(|(_, outputs)| outputs.check(&extra, &inputs))?;
     let size = (args.look.image.width, args.look.image.height);
-    let (scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
+    let (mut scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
+    let path = frames_path(&scene, &numbers)?;
     let cache_file = args.cache.as_deref().map(|path| super::cache::read(path, &scene, &params)).transpose()?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
@@ -100,7 +123,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     // Again with the mesh and its materials, known now.
     let mut inputs = scene.input_paths();
     inputs.extend(args.cache.as_deref());
-    outputs.check(&extra, &inputs)?;
+    jobs.iter().try_for_each(|(_, outputs)| outputs.check(&extra, &inputs))?;
     let size = args.look.image.size(&scene)?;
     if let Some(tile) = args.image_tile {
         tile.rows(size)?;
@@ -145,18 +168,81 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             Some(tile) => FrameParams { region: Some(tile.region(size)?), ..params.frame() },
             None => params.frame(),
         };
-        let output = renderer.render(size, &frame, &progress)?;
-        progress.complete();
-        progress.finish();
-        cancel.check()?;
-        print_stats(&output.stats, started.elapsed());
-        if say::normal()
-            && let Some(warning) = black_image_warning(&output.image, &scene, &params, &args.scene)
-        {
-            sensorlight::errln!("warning: {warning}");
+        // The frames of a path share the renderer and its radiance cache (it does not depend on the camera).
+        renderer.keep_cache();
+        let mut first = Some((progress, started));
+        for (number, outputs) in &jobs {
+            let (progress, started) = first.take().unwrap_or_else(|| {
+                (RenderProgress::new(size.width as u64 * size.height as u64, None, cancel.clone()), Instant::now())
+            });
+            if let (Some(k), Some(path)) = (number, &path) {
+                let camera = path.camera(*k)?;
+                renderer.set_camera(camera);
+                scene.camera = camera;
+                progress.say(&format!("frame {k}: camera at {}", camera.eye));
+            }
+            let output = renderer.render(size, &frame, &progress)?;
+            progress.complete();
+            progress.finish();
+            cancel.check()?;
+            print_stats(&output.stats, started.elapsed());
+            if say::normal()
+                && let Some(warning) = black_image_warning(&output.image, &scene, &params, &args.scene)
+            {
+                sensorlight::errln!("warning: {warning}");
+            }
+            write_outputs(&args, outputs, (&scene, &params), &output, &cancel)?;
         }
-        write_outputs(&args, &outputs, (&scene, &params), &output, &cancel)
+        Ok(())
     })
+}
+
+/// `A..B`: frames A to B, both included.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameRange {
+    pub first: u32,
+    pub last: u32,
+}
+
+impl std::str::FromStr for FrameRange {
+    type Err = String;
+    fn from_str(text: &str) -> Result<Self, String> {
+        let parse = || -> Option<Self> {
+            let (a, b) = text.split_once("..")?;
+            Some(Self { first: a.trim().parse().ok()?, last: b.trim().parse().ok()? })
+        };
+        match parse() {
+            Some(r) if r.first <= r.last => Ok(r),
+            Some(r) => Err(format!("{}..{}: the first frame comes after the last", r.first, r.last)),
+            None => Err(format!("expected A..B (frames A to B, both included), got '{text}'")),
+        }
+    }
+}
+
+/// `OUT.exr` for frame `k`: `OUT.####.exr` (four digits at least), its PNG beside it as for any output.
+pub fn numbered(output: &Path, k: u32) -> PathBuf {
+    let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_extension(format!("{k:04}.{ext}"))
+}
+
+/// The scene's camera path where frames are asked for (`numbers` holds none or only `None` else), each
+/// within it.
+fn frames_path(scene: &Scene, numbers: &[Option<u32>]) -> Result<Option<sensorlight::scene::CameraPath>> {
+    if numbers.iter().all(Option::is_none) {
+        return Ok(None);
+    }
+    let Some(path) = &scene.camera_path else {
+        anyhow::bail!(
+            "--frame and --frames need a camera path: {} has no [path] (keyframes with times; docs/USAGE.md, \
+             \"Frames\")",
+            scene.path.display()
+        );
+    };
+    let last = path.last_frame();
+    if let Some(k) = numbers.iter().flatten().find(|&&k| k > last) {
+        anyhow::bail!("frame {k} is after the path's end: its last key is frame {last} (at {} fps)", path.fps);
+    }
+    Ok(Some(path.clone()))
 }
 
 /// A pixel is lit above this fraction of the scene's brightest light (its brightest `Ke` component or the

@@ -148,6 +148,18 @@ macro_rules! parameters {
                 Ok(())
             }
 
+            /// The flags that set these values, as a command line takes them (`--tile 8`): to pass them on.
+            pub fn to_args(&self) -> Vec<String> {
+                let mut args = Vec::new();
+                $(
+                    if let Some(value) = &self.$key {
+                        args.push($flag.to_owned());
+                        args.push($crate::params::flags::FlagValue::show(value));
+                    }
+                )*
+                args
+            }
+
             /// Sets `param` from the command line's `matches`, where it was given.
             pub fn read(&mut self, param: Param, matches: &clap::ArgMatches) {
                 match param {

@@ -44,6 +44,7 @@ pub fn from_groups(
         notes: Vec::new(),
         inputs: Vec::new(),
         mesh_file: None,
+        camera_path: None,
     }
 }
 

@@ -18,6 +18,12 @@
 //! map = "sky.exr"               # equirectangular, linear radiance (OpenEXR or Radiance HDR), +y up
 //! strength = 1.0                # its texels are multiplied by this (default 1)
 //! rotation_deg = 0              # turned about +y, counter-clockwise seen from above (default 0)
+//! [path]                        # optional: a camera path, keyframes with times (scene::path)
+//! fps = 24
+//! [[path.key]]
+//! time = 0
+//! eye = [278, 273, -800]
+//! target = [278, 273, 0]
 //! [render]                      # optional; every key is also a CLI flag, which wins
 //! sensor = "hemicube"           # or "frustum"
 //! ```
@@ -39,6 +45,8 @@ pub struct SceneFile {
     pub image: ImageSection,
     pub sun: Option<SunSection>,
     pub sky: Option<SkySection>,
+    /// A camera path for the frames of a fly-through (`scene::path`).
+    pub path: Option<super::path::PathSection>,
     /// Render parameters for this scene, uninterpreted here.
     #[serde(default)]
     pub render: toml::Table,

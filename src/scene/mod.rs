@@ -12,6 +12,7 @@ pub mod kind;
 pub mod material;
 mod mesh;
 pub mod obj;
+pub mod path;
 pub mod ray;
 pub mod sky;
 mod sky_sun;
@@ -34,6 +35,7 @@ pub use geometry::{
 pub use kind::FileKind;
 pub use material::Material;
 pub use mesh::{MAX_EMITTER_SPLIT, MAX_TEXTURED_EMITTER_PARTS, Mesh, Surface};
+pub use path::CameraPath;
 pub use ray::Ray;
 pub use sky::SkyMap;
 pub use sun::Sun;
@@ -67,6 +69,8 @@ pub struct Scene {
     pub inputs: Vec<PathBuf>,
     /// The OBJ file the mesh came from (none when built in).
     pub mesh_file: Option<PathBuf>,
+    /// The scene file's camera path (`[path]`), for the frames of a fly-through.
+    pub camera_path: Option<CameraPath>,
 }
 
 impl Scene {
@@ -107,6 +111,10 @@ impl Scene {
                 path.display(),
                 mesh_path.display()
             );
+        };
+        let camera_path = match &file.path {
+            Some(p) => Some(CameraPath::new(p, &camera).with_context(|| format!("{}: [path]", path.display()))?),
+            None => None,
         };
         let sun = match &file.sun {
             Some(s) => Some(
@@ -151,6 +159,7 @@ impl Scene {
             notes: Vec::new(),
             inputs,
             mesh_file,
+            camera_path,
         };
         if let Some(sky) = sky {
             scene.set_sky(sky).with_context(|| format!("{}: [sky]", path.display()))?;
@@ -214,6 +223,7 @@ impl Scene {
             notes,
             inputs,
             mesh_file,
+            camera_path: None,
         })
     }
 
