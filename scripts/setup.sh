@@ -31,6 +31,8 @@ packages=(
     libshaderc-dev glslang-dev spirv-tools
     pkg-config build-essential
     libxkbcommon-x11-0 xvfb x11-apps
+    # A private single-node cluster for `sensorlight slurm` and its tests (scripts/slurm-local.sh).
+    slurm-wlm munge
 )
 
 sudo=""

@@ -20,6 +20,7 @@ mod progress;
 mod reference;
 mod render;
 mod say;
+mod slurm;
 mod tiles;
 mod view;
 
@@ -65,6 +66,8 @@ enum Command {
     Cache(cache::CacheArgs),
     /// Join the tiles of `render --image-tile I/N` into the image the single render writes, bit for bit.
     Assemble(tiles::AssembleArgs),
+    /// Split a render over a Slurm cluster: a cache job, a job array of tiles or frames, a join job.
+    Slurm(slurm::SlurmArgs),
     /// Compute the CPU reference image of the same estimator by ray casting (no GPU needed).
     Reference(reference::ReferenceArgs),
     /// Compare an image with a reference image: relative RMSE, mean error and bias over lit pixels.
@@ -88,6 +91,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Render(args) => render::run(args),
         Command::Cache(args) => cache::run(args),
         Command::Assemble(args) => tiles::run(args),
+        Command::Slurm(args) => slurm::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench::run(args),
