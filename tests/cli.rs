@@ -324,7 +324,9 @@ fn every_flag_in_help_is_in_the_usage_guide() {
             missing.push(format!("sensorlight {flag}"));
         }
     }
-    for command in ["devices", "render", "cache", "assemble", "slurm", "reference", "compare", "bench", "metrics", "view"] {
+    for command in
+        ["devices", "render", "cache", "assemble", "slurm", "reference", "compare", "bench", "metrics", "view"]
+    {
         let text = section(command);
         for flag in long_flags(&[command, "--help"]) {
             if !has(text, &flag) && !global.contains(&flag) {

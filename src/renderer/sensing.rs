@@ -43,9 +43,12 @@ pub(super) struct Rounds {
     pub(super) supersample_time: Duration,
 }
 
-/// How far beyond a frame's region (a tile) its pixels are made right, besides the filters' radius: the
-/// supersampling's neighbourhoods (detection, donors, the light's ends), each a pixel, read across it.
-pub const REGION_MARGIN: u32 = 8;
+/// How far beyond a frame's region (a tile) its pixels are made right, besides the filters' radius: a
+/// supersampled pixel's samples take R from donors a pixel away, whose R the filter made; where the light
+/// ends inside a pixel is judged from its neighbours as resolved, themselves from their donors: three
+/// pixels in all (4 tiles of the Cornell box at 256² sense 1.26× the single render's sensors with 8,
+/// docs/BENCHMARKS.md "Many processes").
+pub const REGION_MARGIN: u32 = 3;
 
 impl Renderer {
     /// Senses the image of G-buffer `g` into `targets`' maps, round by round; previews and progress through
