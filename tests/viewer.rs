@@ -369,3 +369,31 @@ fn a_bad_script_is_refused_with_its_line_before_any_window() {
     assert_eq!(run.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("bad.script:2") && stderr.contains("takes 2 argument(s)"), "{stderr}");
 }
+
+/// `frame K` in a script (as `p`, which plays the path, goes from frame to frame) looks from frame K of the
+/// scene's camera path: the save is `render --frame K`'s PNG byte for byte.
+#[test]
+fn a_scripted_frame_shows_render_s_frame_of_the_path() {
+    let dir = common::scratch("viewer-frame");
+    let x = Xvfb::start();
+    let script = dir.join("frame.script");
+    let saved = dir.join("frame.exr");
+    std::fs::write(&script, format!("wait done\nframe 12\nwait done\nsave {}\nquit\n", saved.display())).unwrap();
+    let size = SIZE.to_string();
+    let run = common::command()
+        .args(["view", "scenes/cornell/fly.toml", "--width", &size, "--height", &size, "--script"])
+        .arg(&script)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let out = dir.join("render.exr");
+    let args = ["render", "scenes/cornell/fly.toml", "-o", out.to_str().unwrap(), "--width", &size, "--height", &size];
+    let rendered = common::sensorlight(&[&args[..], &["--frame", "12"]].concat());
+    assert!(rendered.status.success(), "{}", common::stderr(&rendered));
+    let expected = png_rgb(&dir.join("render.0012.png"));
+    assert_eq!(png_rgb(&saved.with_extension("png")), expected, "the viewer's frame 12 is not render's");
+    let first = render_png(&common::project("scenes/cornell/fly.toml"), &dir.join("first.exr"));
+    assert!(difference(&first, &expected).0 > expected.len() / 4, "frame 12 is not the path's first view");
+}

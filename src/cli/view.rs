@@ -26,7 +26,8 @@ pub struct ViewArgs {
     /// Scene file (TOML), or an OBJ or glTF mesh, framed by an automatic camera as `render` frames it.
     /// In the window: left drag orbits, right or middle drag pans, the wheel dollies; + and - change the
     /// exposure (0 resets it); 1 to 5 show the image, R, the sensors, the surfaces, the emission; s saves;
-    /// r goes back to the scene's camera; q or Esc quits
+    /// r goes back to the scene's camera; p plays the scene's camera path ([path]), a frame as each render is
+    /// done, and stops it; q or Esc quits
     scene: PathBuf,
     /// Where `s` saves: F.exr with the AOVs `render --aovs` writes, and F.png beside it (each save replaces
     /// them, all or none)
@@ -51,7 +52,8 @@ fn script_help() -> String {
     let views: Vec<&str> = viewer::Show::ALL.iter().map(|s| s.word()).collect();
     format!(
         "Drive the window from a file of commands, one a line: wait done, wait round N, sync, orbit YAW PITCH, pan \
-         X Y, dolly F, exposure STOPS, show VIEW ({}), save F.exr, resize WIDTH HEIGHT, quit (docs/DESIGN.md §12)",
+         X Y, dolly F, exposure STOPS, show VIEW ({}), save F.exr, resize WIDTH HEIGHT, frame K (of the scene's \
+         camera path), play (the path, a frame a render; again: stop), quit (docs/DESIGN.md §12)",
         views.join(" | ")
     )
 }

@@ -30,15 +30,15 @@ use glam::Vec4;
 pub use display::Show;
 use orbit::Orbit;
 use present::Presenter;
-use progress::{ViewProgress, wait_for_stdin};
-use script::Command;
+use progress::ViewProgress;
+use script::{Command, ScriptRun};
 pub use window::Action;
 use window::Window;
 
 use crate::cancel::{Cancelled, Reason};
 use crate::params::FrameParams;
 use crate::renderer::{Phase, RenderOutput, Renderer};
-use crate::scene::{Camera, ImageSize, Scene};
+use crate::scene::{Aabb, Camera, CameraPath, ImageSize, Scene};
 use crate::vk::{Device, WindowTarget};
 
 /// How long the viewer waits for an event when it has nothing to render.
@@ -113,6 +113,9 @@ pub fn run(setup: ViewSetup<'_>, host: &mut dyn ViewHost) -> Result<()> {
         moved_at: None,
         first_images: Vec::new(),
         last_title: Instant::now(),
+        path: setup.scene.camera_path.clone(),
+        playing: None,
+        bounds: setup.scene.mesh.bounds,
     };
     let result = session.run(&mut renderer, &setup);
     let summary = session.summary();
@@ -163,18 +166,6 @@ impl RenderState {
     }
 }
 
-/// A script and how far it got.
-struct ScriptRun {
-    commands: Vec<Command>,
-    next: usize,
-    syncs: u32,
-    /// A `resize` asked for this size at this time: the script waits until the window has it (or a while).
-    resizing: Option<((u32, u32), Instant)>,
-}
-
-/// How long a script's `resize` waits for the window system to grant the size before it goes on.
-const RESIZE_WAIT: Duration = Duration::from_secs(5);
-
 struct Session<'h> {
     window: Window,
     presenter: Presenter,
@@ -206,6 +197,11 @@ struct Session<'h> {
     moved_at: Option<Instant>,
     first_images: Vec<Duration>,
     last_title: Instant,
+    /// The scene's camera path (`p` plays it, a script's `frame K` goes to a frame), and the frame shown
+    /// while it plays.
+    path: Option<CameraPath>,
+    playing: Option<u32>,
+    bounds: Aabb,
 }
 
 impl Session<'_> {
@@ -243,6 +239,12 @@ impl Session<'_> {
                     self.title(true);
                     self.present();
                     self.run_saves();
+                    // Playing the path: the next frame (from the first again after the last).
+                    if let (Some(k), Some(path)) = (self.playing, &self.path) {
+                        let next = if k >= path.last_frame() { 0 } else { k + 1 };
+                        self.playing = Some(next);
+                        self.apply(Action::Frame(next));
+                    }
                 }
                 Err(e) if matches!(e.downcast_ref::<Cancelled>(), Some(Cancelled(Reason::Superseded))) => {}
                 Err(e) => return Err(e),
@@ -280,6 +282,18 @@ impl Session<'_> {
             Action::Pan { x, y } => self.orbit.pan(x, y),
             Action::Dolly(f) => self.orbit.dolly(f),
             Action::ResetCamera => self.orbit = self.start,
+            Action::Frame(k) => return self.go_to_frame(k),
+            Action::Play => {
+                self.playing = match self.playing {
+                    Some(_) => None,
+                    None if self.path.is_some() => Some(0),
+                    None => {
+                        self.host.say("no camera path to play: the scene file has no [path]");
+                        None
+                    }
+                };
+                return self.playing.is_some_and(|k| self.go_to_frame(k));
+            }
             Action::ExposureBy(stops) => self.exposure += stops,
             Action::ExposureTo(stops) => self.exposure = stops,
             Action::ExposureReset => self.exposure = self.start_exposure,
@@ -320,61 +334,28 @@ impl Session<'_> {
         true
     }
 
-    /// The next script commands that can run now, as actions. A `wait` stops the script until it is met.
-    fn step_script(&mut self) -> Vec<Action> {
-        let mut actions = Vec::new();
-        let (done, rounds, size) = (self.this.done(), self.this.rounds, self.window.size());
-        let Some(run) = &mut self.script else { return actions };
-        if let Some((wanted, asked)) = run.resizing {
-            if size != wanted && asked.elapsed() < RESIZE_WAIT {
-                return actions;
-            }
-            run.resizing = None;
+    /// Looks from frame `k` of the camera path, exactly as `render --frame K` does; an orbit goes on from
+    /// there. Says why where there is no such frame.
+    fn go_to_frame(&mut self, k: u32) -> bool {
+        let Some(path) = &self.path else {
+            self.host.say(&format!("no frame {k}: the scene file has no camera path ([path])"));
+            return false;
+        };
+        if k > path.last_frame() {
+            self.host.say(&format!("no frame {k}: the path's last is frame {}", path.last_frame()));
+            return false;
         }
-        while let Some(command) = run.commands.get(run.next) {
-            let action = match command {
-                Command::WaitDone if !done => break,
-                Command::WaitRound(n) if !done && rounds < *n => break,
-                // Saved once done: later commands wait for it.
-                Command::Save(_) if !done => break,
-                Command::WaitDone | Command::WaitRound(_) => None,
-                Command::Sync => {
-                    run.syncs += 1;
-                    let o = &self.orbit;
-                    let line = format!(
-                        "sync {} {{\"eye\":{:?},\"target\":{:?},\"up\":{:?},\"vfov_deg\":{:?}}}",
-                        run.syncs,
-                        o.eye.to_array(),
-                        o.target.to_array(),
-                        o.up.to_array(),
-                        o.vfov_deg
-                    );
-                    wait_for_stdin(&line);
-                    None
-                }
-                Command::Orbit { yaw_deg, pitch_deg } => {
-                    Some(Action::Orbit { yaw_deg: *yaw_deg, pitch_deg: *pitch_deg })
-                }
-                Command::Pan { x, y } => Some(Action::Pan { x: *x, y: *y }),
-                Command::Dolly(f) => Some(Action::Dolly(*f)),
-                Command::Exposure(stops) => Some(Action::ExposureTo(*stops)),
-                Command::Show(show) => Some(Action::Show(*show)),
-                Command::Save(path) => Some(Action::Save(Some(path.clone()))),
-                Command::Resize { width, height } => {
-                    run.resizing = Some(((*width, *height), Instant::now()));
-                    Some(Action::Resize(*width, *height))
-                }
-                Command::Quit => Some(Action::Quit),
-            };
-            run.next += 1;
-            let moves = matches!(action, Some(Action::Orbit { .. } | Action::Pan { .. } | Action::Dolly(_)));
-            actions.extend(action);
-            // A move starts a render, a resize waits for the window: what follows waits for either.
-            if moves || run.resizing.is_some() {
-                break;
+        match path.camera(k) {
+            Ok(camera) => {
+                self.camera = camera;
+                self.orbit = Orbit::new(&camera, &self.bounds);
+                self.wanted = true;
+                self.this = RenderState::new();
+                self.moved_at = Some(Instant::now());
             }
+            Err(e) => self.host.say(&format!("{e:#}")),
         }
-        actions
+        false
     }
 
     /// Shows what [`Session::show`] says of the render so far.

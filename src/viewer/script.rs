@@ -12,14 +12,19 @@
 //! show radiance          # image | radiance | sensors | surfaces | emission
 //! save out.exr           # once done: the EXR (image and AOVs) and the PNG beside it, as `render` writes
 //! resize 320 240         # ask for a window of that many pixels (the picture is letterboxed in it)
+//! frame 12             # the camera of frame 12 of the scene's camera path ([path])
+//! play                   # play the path, a frame as each render is done (again: stop)
 //! quit
 //! ```
 
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, bail};
 
 use super::display::Show;
+use super::progress::wait_for_stdin;
+use super::window::Action;
 
 /// One line of a script.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,13 +32,26 @@ pub enum Command {
     WaitDone,
     WaitRound(u32),
     Sync,
-    Orbit { yaw_deg: f32, pitch_deg: f32 },
-    Pan { x: f32, y: f32 },
+    Orbit {
+        yaw_deg: f32,
+        pitch_deg: f32,
+    },
+    Pan {
+        x: f32,
+        y: f32,
+    },
     Dolly(f32),
     Exposure(f32),
     Show(Show),
     Save(PathBuf),
-    Resize { width: u32, height: u32 },
+    Resize {
+        width: u32,
+        height: u32,
+    },
+    /// The camera of this frame of the scene's camera path.
+    Frame(u32),
+    /// Play the path (or stop).
+    Play,
     Quit,
 }
 
@@ -105,9 +123,92 @@ fn command(verb: &str, args: &[&str]) -> Result<Command> {
             };
             Command::Resize { width: pixels(args[0])?, height: pixels(args[1])? }
         }
+        "frame" => match args {
+            [k] => Command::Frame(k.parse().map_err(|_| anyhow::anyhow!("`frame K`: '{k}' is not a frame number"))?),
+            _ => bail!("`frame` takes 1 argument, the frame's number"),
+        },
+        "play" => count(0).map(|_| Command::Play)?,
         "quit" => count(0).map(|_| Command::Quit)?,
-        _ => bail!("unknown command '{verb}' (wait, sync, orbit, pan, dolly, exposure, show, save, resize, quit)"),
+        _ => bail!(
+            "unknown command '{verb}' (wait, sync, orbit, pan, dolly, exposure, show, save, resize, frame, play, quit)"
+        ),
     })
+}
+
+/// A script and how far it got.
+pub(super) struct ScriptRun {
+    pub(super) commands: Vec<Command>,
+    pub(super) next: usize,
+    pub(super) syncs: u32,
+    /// A `resize` asked for this size at this time: the script waits until the window has it (or a while).
+    pub(super) resizing: Option<((u32, u32), Instant)>,
+}
+
+/// How long a script's `resize` waits for the window system to grant the size before it goes on.
+const RESIZE_WAIT: Duration = Duration::from_secs(5);
+
+impl super::Session<'_> {
+    /// The next script commands that can run now, as actions. A `wait` stops the script until it is met.
+    pub(super) fn step_script(&mut self) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let (done, rounds, size) = (self.this.done(), self.this.rounds, self.window.size());
+        let Some(run) = &mut self.script else { return actions };
+        if let Some((wanted, asked)) = run.resizing {
+            if size != wanted && asked.elapsed() < RESIZE_WAIT {
+                return actions;
+            }
+            run.resizing = None;
+        }
+        while let Some(command) = run.commands.get(run.next) {
+            let action = match command {
+                Command::WaitDone if !done => break,
+                Command::WaitRound(n) if !done && rounds < *n => break,
+                // Saved once done: later commands wait for it.
+                Command::Save(_) if !done => break,
+                Command::WaitDone | Command::WaitRound(_) => None,
+                Command::Sync => {
+                    run.syncs += 1;
+                    let o = &self.orbit;
+                    let line = format!(
+                        "sync {} {{\"eye\":{:?},\"target\":{:?},\"up\":{:?},\"vfov_deg\":{:?}}}",
+                        run.syncs,
+                        o.eye.to_array(),
+                        o.target.to_array(),
+                        o.up.to_array(),
+                        o.vfov_deg
+                    );
+                    wait_for_stdin(&line);
+                    None
+                }
+                Command::Orbit { yaw_deg, pitch_deg } => {
+                    Some(Action::Orbit { yaw_deg: *yaw_deg, pitch_deg: *pitch_deg })
+                }
+                Command::Pan { x, y } => Some(Action::Pan { x: *x, y: *y }),
+                Command::Dolly(f) => Some(Action::Dolly(*f)),
+                Command::Exposure(stops) => Some(Action::ExposureTo(*stops)),
+                Command::Show(show) => Some(Action::Show(*show)),
+                Command::Save(path) => Some(Action::Save(Some(path.clone()))),
+                Command::Resize { width, height } => {
+                    run.resizing = Some(((*width, *height), Instant::now()));
+                    Some(Action::Resize(*width, *height))
+                }
+                Command::Frame(k) => Some(Action::Frame(*k)),
+                Command::Play => Some(Action::Play),
+                Command::Quit => Some(Action::Quit),
+            };
+            run.next += 1;
+            let moves = matches!(
+                action,
+                Some(Action::Orbit { .. } | Action::Pan { .. } | Action::Dolly(_) | Action::Frame(_) | Action::Play)
+            );
+            actions.extend(action);
+            // A move starts a render, a resize waits for the window: what follows waits for either.
+            if moves || run.resizing.is_some() {
+                break;
+            }
+        }
+        actions
+    }
 }
 
 #[cfg(test)]

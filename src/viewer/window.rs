@@ -54,6 +54,10 @@ pub enum Action {
     Dolly(f32),
     /// Back to the scene's camera.
     ResetCamera,
+    /// To the camera of this frame of the scene's camera path.
+    Frame(u32),
+    /// Play the camera path, a frame as each render is done; or stop playing.
+    Play,
     ExposureBy(f32),
     ExposureTo(f32),
     /// Back to the exposure the viewer started with.
@@ -202,6 +206,7 @@ fn key(key: Key<&str>) -> Option<Action> {
             "0" => Action::ExposureReset,
             "s" | "S" => Action::Save(None),
             "r" | "R" => Action::ResetCamera,
+            "p" | "P" => Action::Play,
             other => Show::ALL.into_iter().find(|s| other.starts_with(s.key())).map(Action::Show)?,
         },
         _ => return None,
