@@ -65,3 +65,20 @@ fn frames_outside_the_path_or_without_one_are_refused() {
     assert!(common::stderr(&run).contains("has no [path]"), "{}", common::stderr(&run));
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "a refused render wrote something");
 }
+
+/// `--write-scene` writes the camera path too: the written scene renders the path's frames as the original.
+#[test]
+fn a_written_scene_keeps_its_camera_path() {
+    let dir = common::scratch("frames_write_scene");
+    let written = dir.join("written.toml");
+    let run = render(&dir.join("a.exr"), &["--frame", "5", "--write-scene", written.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let text = std::fs::read_to_string(&written).unwrap();
+    assert!(text.contains("[path]") && text.matches("[[path.key]]").count() == 3, "{text}");
+    let out = dir.join("b.exr");
+    let mut args = vec!["render", written.to_str().unwrap(), "-o", out.to_str().unwrap(), "--frame", "5"];
+    args.extend_from_slice(&FLAGS);
+    let again = common::sensorlight(&args);
+    assert!(again.status.success(), "{}", common::stderr(&again));
+    assert!(bytes(&dir.join("a.0005.exr")) == bytes(&dir.join("b.0005.exr")), "the written scene's frame 5 differs");
+}

@@ -15,6 +15,7 @@ mod cache;
 mod compare;
 mod counter;
 mod devices;
+mod frames;
 mod metrics;
 mod progress;
 mod reference;

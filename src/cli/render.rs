@@ -57,7 +57,7 @@ pub struct RenderArgs {
     /// Render frames A to B (both included) of the camera path, each to OUT.####.exr and its PNG; one
     /// radiance cache serves them all
     #[arg(long, value_name = "A..B")]
-    frames: Option<FrameRange>,
+    frames: Option<super::frames::FrameRange>,
     /// Every N refinement rounds, write the image so far (unfiltered) to OUT.preview.png; it is removed once
     /// the render ends
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -98,7 +98,10 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
         .map(|&k| {
             Ok((
                 k,
-                super::ImageOutputs::new(&k.map_or_else(|| args.output.clone(), |k| numbered(&args.output, k)), png)?,
+                super::ImageOutputs::new(
+                    &k.map_or_else(|| args.output.clone(), |k| super::frames::numbered(&args.output, k)),
+                    png,
+                )?,
             ))
         })
         .collect::<Result<Vec<_>>>()?;
@@ -115,7 +118,7 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
     jobs.iter().try_for_each(|(_, outputs)| outputs.check(&extra, &inputs))?;
     let size = (args.look.image.width, args.look.image.height);
     let (mut scene, params) = super::load_input(&args.scene, &args.look.overrides(), size, &args.look.lights)?;
-    let path = frames_path(&scene, &numbers)?;
+    let path = super::frames::path_of(&scene, &numbers)?;
     let cache_file = args.cache.as_deref().map(|path| super::cache::read(path, &scene, &params)).transpose()?;
     if params.estimator.indirect.bounces().is_some() {
         super::warn_all(&sensorlight::gi::albedo_warnings(&scene.mesh));
@@ -191,58 +194,10 @@ pub fn run(args: RenderArgs) -> Result<ExitCode> {
             {
                 sensorlight::errln!("warning: {warning}");
             }
-            write_outputs(&args, outputs, (&scene, &params), &output, &cancel)?;
+            write_outputs(&args, (outputs, *number), (&scene, &params), &output, &cancel)?;
         }
         Ok(())
     })
-}
-
-/// `A..B`: frames A to B, both included.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FrameRange {
-    pub first: u32,
-    pub last: u32,
-}
-
-impl std::str::FromStr for FrameRange {
-    type Err = String;
-    fn from_str(text: &str) -> Result<Self, String> {
-        let parse = || -> Option<Self> {
-            let (a, b) = text.split_once("..")?;
-            Some(Self { first: a.trim().parse().ok()?, last: b.trim().parse().ok()? })
-        };
-        match parse() {
-            Some(r) if r.first <= r.last => Ok(r),
-            Some(r) => Err(format!("{}..{}: the first frame comes after the last", r.first, r.last)),
-            None => Err(format!("expected A..B (frames A to B, both included), got '{text}'")),
-        }
-    }
-}
-
-/// `OUT.exr` for frame `k`: `OUT.####.exr` (four digits at least), its PNG beside it as for any output.
-pub fn numbered(output: &Path, k: u32) -> PathBuf {
-    let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
-    output.with_extension(format!("{k:04}.{ext}"))
-}
-
-/// The scene's camera path where frames are asked for (`numbers` holds none or only `None` else), each
-/// within it.
-fn frames_path(scene: &Scene, numbers: &[Option<u32>]) -> Result<Option<sensorlight::scene::CameraPath>> {
-    if numbers.iter().all(Option::is_none) {
-        return Ok(None);
-    }
-    let Some(path) = &scene.camera_path else {
-        anyhow::bail!(
-            "--frame and --frames need a camera path: {} has no [path] (keyframes with times; docs/USAGE.md, \
-             \"Frames\")",
-            scene.path.display()
-        );
-    };
-    let last = path.last_frame();
-    if let Some(k) = numbers.iter().flatten().find(|&&k| k > last) {
-        anyhow::bail!("frame {k} is after the path's end: its last key is frame {last} (at {} fps)", path.fps);
-    }
-    Ok(Some(path.clone()))
 }
 
 /// A pixel is lit above this fraction of the scene's brightest light (its brightest `Ke` component or the
@@ -413,9 +368,10 @@ fn print_details(s: &RenderStats) {
     );
 }
 
+/// Writes `out`'s files, all or none; a frame's (`number`) statistics are numbered as its images.
 fn write_outputs(
     args: &RenderArgs,
-    outputs: &super::ImageOutputs,
+    (outputs, number): (&super::ImageOutputs, Option<u32>),
     (scene, params): (&Scene, &RenderParams),
     out: &RenderOutput,
     cancel: &Cancel,
@@ -444,7 +400,9 @@ fn write_outputs(
         }
         files.stage_bytes(path, scene.to_toml_with(path, &render)?.as_bytes())?;
     }
-    if let Some(path) = &args.stats_json {
+    let stats_json =
+        args.stats_json.as_ref().map(|p| number.map_or_else(|| p.clone(), |k| super::frames::numbered(p, k)));
+    if let Some(path) = &stats_json {
         let json = sensorlight::output::json_text(&out.stats).context("stats to JSON")?;
         files.stage_bytes(path, json.as_bytes())?;
     }
@@ -452,7 +410,7 @@ fn write_outputs(
     cancel.check()?;
     files.commit()?;
     if say::normal() {
-        let extra = [args.stats_json.as_ref(), args.write_scene.as_ref()];
+        let extra = [stats_json.as_ref(), args.write_scene.as_ref()];
         for path in outputs.paths().chain(extra.into_iter().flatten()) {
             sensorlight::errln!("wrote {}", path.display());
         }

@@ -15,7 +15,7 @@ use anyhow::{Context as _, Result, bail, ensure};
 use clap::Args;
 
 use super::args::{EngineFlags, LookFlags};
-use super::render::FrameRange;
+use super::frames::FrameRange;
 use super::tiles::TileSpec;
 
 #[derive(Args)]
@@ -160,8 +160,8 @@ pub fn run(args: SlurmArgs) -> Result<ExitCode> {
         Split::Tiles(_) => say!("the image: {} (and its PNG), once the join job is done", output.display()),
         Split::Frames(r) => say!(
             "the frames: {} to {}",
-            super::render::numbered(&output, r.first).display(),
-            super::render::numbered(&output, r.last).display()
+            super::frames::numbered(&output, r.first).display(),
+            super::frames::numbered(&output, r.last).display()
         ),
     }
     Ok(ExitCode::SUCCESS)

@@ -345,6 +345,24 @@ impl Scene {
             table.insert("rotation_deg".into(), num(sky.rotation_deg));
             doc.insert("sky".into(), toml::Value::Table(table));
         }
+        if let Some(path) = &self.camera_path {
+            // Every key whole (its up and field of view too), so that it reads back whatever [camera] is.
+            let keys = (path.keys.iter())
+                .map(|k| {
+                    let mut key = toml::Table::new();
+                    key.insert("time".into(), num(k.time));
+                    key.insert("eye".into(), vec(k.eye));
+                    key.insert("target".into(), vec(k.target));
+                    key.insert("up".into(), vec(k.up));
+                    key.insert("vfov_deg".into(), num(k.vfov_deg));
+                    toml::Value::Table(key)
+                })
+                .collect();
+            let mut table = toml::Table::new();
+            table.insert("fps".into(), num(path.fps));
+            table.insert("key".into(), toml::Value::Array(keys));
+            doc.insert("path".into(), toml::Value::Table(table));
+        }
         if !render.is_empty() {
             doc.insert("render".into(), toml::Value::Table(render.clone()));
         }
