@@ -28,7 +28,9 @@ fn a_render_from_the_cache_file_equals_the_render_that_solves_its_own() {
     let file = dir.join("cornell.slc");
     let made = run(&["cache", SCENE, "-o", file.to_str().unwrap()]);
     assert!(made.status.success(), "{}", common::stderr(&made));
-    assert!(common::stderr(&made).contains("bounces"), "{}", common::stderr(&made));
+    let said = common::stderr(&made);
+    assert!(said.contains("bounces") && said.contains("entries"), "{said}");
+    assert!(!said.contains("pixels resolved"), "the cache has no pixels to resolve: {said}");
 
     let (alone, cached) = (dir.join("alone.exr"), dir.join("cached.exr"));
     let a = render(&alone, &[]);

@@ -89,14 +89,18 @@ struct State {
 }
 
 impl RenderProgress {
-    /// A display for a render of `pixels` pixels, starting with the strategy choice; the render stops
-    /// between batches once `cancel` is set.
+    /// A display for a render of `pixels` pixels (0: no image, the radiance cache alone), starting with the
+    /// strategy choice; the render stops between batches once `cancel` is set.
     pub fn new(pixels: u64, preview: Option<Preview>, cancel: Cancel) -> Self {
         let show = say::normal();
         let terminal = std::io::stderr().is_terminal();
         let bar = (show && terminal).then(|| {
             let bar = ProgressBar::new(pixels.max(1));
-            let template = "{spinner} {elapsed:>4} [{bar:30}] {percent:>3}% of pixels resolved · {msg}";
+            // No pixels (`sensorlight cache`): the phase alone.
+            let template = match pixels {
+                0 => "{spinner} {elapsed:>4} {msg}",
+                _ => "{spinner} {elapsed:>4} [{bar:30}] {percent:>3}% of pixels resolved · {msg}",
+            };
             let style = ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
             bar.set_style(style.progress_chars("=> "));
             bar.enable_steady_tick(Duration::from_millis(200));
@@ -202,11 +206,11 @@ impl Shared {
         let tenths = (10 * s.resolved).checked_div(s.pixels).unwrap_or(0);
         let due = s.last_line.is_none_or(|t| t.elapsed() >= LINE_EVERY);
         if force || tenths > s.tenths_said || due {
-            let percent = if s.pixels > 0 { 100.0 * s.resolved as f64 / s.pixels as f64 } else { 0.0 };
-            sensorlight::errln!(
-                "[{:6.1} s] {percent:3.0} % of pixels resolved; {what}",
-                self.start.elapsed().as_secs_f64()
-            );
+            let resolved = match s.pixels {
+                0 => String::new(),
+                n => format!("{:3.0} % of pixels resolved; ", 100.0 * s.resolved as f64 / n as f64),
+            };
+            sensorlight::errln!("[{:6.1} s] {resolved}{what}", self.start.elapsed().as_secs_f64());
             s.tenths_said = tenths;
             s.last_line = Some(Instant::now());
         }
