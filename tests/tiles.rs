@@ -78,6 +78,10 @@ fn missing_duplicate_foreign_and_overlapping_tiles_are_refused() {
     std::fs::create_dir_all(&other).unwrap();
     let foreign = tiles(&other, 3, &["--dradiance", "0.1"]);
     refused(&[parts[0].clone(), parts[1].clone(), foreign[2].clone()], "are tiles of different renders");
+    // The same render but --aovs: the joined file would not be one render's.
+    let with_aovs = other.join("aovs.exr");
+    render(&with_aovs, &["--image-tile", "3/3", "--aovs"]);
+    refused(&[parts[0].clone(), parts[1].clone(), with_aovs], "are tiles of different renders");
     let whole = dir.join("whole.exr");
     render(&whole, &[]);
     refused(std::slice::from_ref(&whole), "not a tile of `render --image-tile`");

@@ -45,9 +45,10 @@ pub struct RenderArgs {
     /// what differs, where it was solved for another scene or other settings
     #[arg(long, value_name = "FILE")]
     cache: Option<PathBuf>,
-    /// Render only tile I of N (from 1; --tile is the refinement's grid step): the band of rows (I − 1)·H/N .. I·H/N, every AOV included, into an
-    /// EXR whose data window says where it lies (no PNG); `sensorlight assemble` joins the N tiles into the
-    /// image this render would write without --tile, bit for bit (give every tile the same flags)
+    /// Render only tile I of N (from 1; --tile is the refinement's grid step): the band of rows
+    /// (I − 1)·H/N .. I·H/N, every AOV included, into an EXR whose data window says where it lies (no PNG);
+    /// `sensorlight assemble` joins the N tiles into the image this render would write without
+    /// --image-tile, bit for bit (give every tile the same flags)
     #[arg(long, value_name = "I/N", conflicts_with = "frames")]
     image_tile: Option<super::tiles::TileSpec>,
     /// Render frame K of the scene file's camera path ([path]: the camera at time K / fps), to OUT.####.exr

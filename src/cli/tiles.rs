@@ -156,10 +156,12 @@ pub fn run(args: AssembleArgs) -> Result<ExitCode> {
     let tiles = args.tiles.iter().map(|p| read(p)).collect::<Result<Vec<_>>>()?;
     let first = &tiles[0];
     for t in &tiles[1..] {
-        if t.render != first.render || t.tile.count != first.tile.count {
+        let same = (&t.render, t.tile.count, t.aovs, t.exposure)
+            == (&first.render, first.tile.count, first.aovs, first.exposure);
+        if !same {
             bail!(
-                "{} and {} are tiles of different renders (another scene, settings, size or count of tiles); \
-                 render every tile with the same command but its --image-tile",
+                "{} and {} are tiles of different renders (another scene, settings, size, count of tiles, --aovs or \
+                 exposure); render every tile with the same command but its --image-tile",
                 first.path.display(),
                 t.path.display()
             );
