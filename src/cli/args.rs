@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context as _, Result, ensure};
 use clap::{Args, ValueEnum as _};
 use glam::Vec3;
-use sensorlight::params::flags::{FlagSet, ParamFlags, parse_rgb, whole};
+use sensorlight::params::flags::{FlagSet, FlagValue as _, ParamFlags, parse_rgb, whole};
 use sensorlight::params::{Overrides, Param};
 use sensorlight::renderer::DEFAULT_IN_FLIGHT;
 use sensorlight::scene::{ImageSize, Scene, SkyMap, Sun};
@@ -118,7 +118,7 @@ impl LookFlags {
             args.push("--no-png".into());
         }
         let l = &self.lights;
-        let xyz = |v: [f32; 3]| format!("{},{},{}", v[0], v[1], v[2]);
+        let xyz = |v: [f32; 3]| v.show();
         let lights = [
             ("--sun", l.sun.map(xyz)),
             ("--sun-irradiance", l.sun_irradiance.map(xyz)),
@@ -200,6 +200,12 @@ impl ImageFlags {
         ensure!(size.width >= 1 && size.height >= 1, "--width and --height must be at least 1");
         Ok(size)
     }
+}
+
+/// Two whole numbers written around `separator` (`3/4`, `0..24`), for flags that name a part of a whole.
+pub fn two_numbers(text: &str, separator: &str) -> Option<(u32, u32)> {
+    let (a, b) = text.split_once(separator)?;
+    Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
 }
 
 fn parse_xyz(s: &str) -> Result<[f32; 3], String> {

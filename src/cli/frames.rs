@@ -16,11 +16,7 @@ pub struct FrameRange {
 impl std::str::FromStr for FrameRange {
     type Err = String;
     fn from_str(text: &str) -> Result<Self, String> {
-        let parse = || -> Option<Self> {
-            let (a, b) = text.split_once("..")?;
-            Some(Self { first: a.trim().parse().ok()?, last: b.trim().parse().ok()? })
-        };
-        match parse() {
+        match super::args::two_numbers(text, "..").map(|(first, last)| Self { first, last }) {
             Some(r) if r.first <= r.last => Ok(r),
             Some(r) => Err(format!("{}..{}: the first frame comes after the last", r.first, r.last)),
             None => Err(format!("expected A..B (frames A to B, both included), got '{text}'")),

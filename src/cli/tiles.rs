@@ -46,11 +46,7 @@ impl std::fmt::Display for TileSpec {
 impl std::str::FromStr for TileSpec {
     type Err = String;
     fn from_str(text: &str) -> Result<Self, String> {
-        let parse = || -> Option<Self> {
-            let (i, n) = text.split_once('/')?;
-            Some(Self { index: i.trim().parse().ok()?, count: n.trim().parse().ok()? })
-        };
-        match parse() {
+        match super::args::two_numbers(text, "/").map(|(index, count)| Self { index, count }) {
             Some(t) if t.count >= 1 && (1..=t.count).contains(&t.index) => Ok(t),
             Some(t) => Err(format!("tile {t}: the tile's number runs from 1 to its count")),
             None => Err(format!("expected I/N (tile I of N, from 1), got '{text}'")),

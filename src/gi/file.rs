@@ -8,7 +8,6 @@
 //! `f32` each), then a CRC-32 of everything before it, so that a truncated or damaged file is refused.
 
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 
 use glam::{Vec3, Vec4};
 use serde::{Deserialize, Serialize};
@@ -210,9 +209,7 @@ impl Fnv {
     }
 
     pub fn hex(&self) -> String {
-        let mut s = String::new();
-        write!(s, "{:016x}", self.0).unwrap();
-        s
+        format!("{:016x}", self.0)
     }
 }
 

@@ -133,13 +133,23 @@ pub type NamedChannels = Vec<(String, Vec<f32>)>;
 
 /// Every channel of the first layer of an EXR: (width, height, channels).
 pub fn read_all(path: &Path) -> Result<(usize, usize, NamedChannels)> {
-    let image =
-        read_all_flat_layers_from_file(path).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?;
-    let layer = image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: no layers", path.display()))?;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let channels =
-        layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
-    Ok((w, h, channels))
+    let image = read_flat(path)?;
+    let layer = first_layer(&image, path)?;
+    Ok((layer.size.width(), layer.size.height(), channels_of(layer)))
+}
+
+/// Every layer of the EXR at `path`, its channels as flat samples.
+fn read_flat(path: &Path) -> Result<FlatImage> {
+    read_all_flat_layers_from_file(path).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))
+}
+
+fn first_layer<'a>(image: &'a FlatImage, path: &Path) -> Result<&'a Layer<AnyChannels<FlatSamples>>> {
+    image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: no layers", path.display()))
+}
+
+/// A layer's channels by name, as `f32`.
+fn channels_of(layer: &Layer<AnyChannels<FlatSamples>>) -> NamedChannels {
+    layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect()
 }
 
 /// Reads the named channels of an EXR written by [`ExrImage::write`] (for tests and tools).
@@ -168,9 +178,8 @@ pub struct Tile {
 
 /// Reads an EXR as a tile of an image (a whole image is its own one tile).
 pub fn read_tile(path: &Path) -> Result<Tile> {
-    let image =
-        read_all_flat_layers_from_file(path).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?;
-    let layer = image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: no layers", path.display()))?;
+    let image = read_flat(path)?;
+    let layer = first_layer(&image, path)?;
     let (width, height) = (layer.size.width(), layer.size.height());
     let display = image.attributes.display_window;
     let position = layer.attributes.layer_position - display.position;
@@ -192,7 +201,5 @@ pub fn read_tile(path: &Path) -> Result<Tile> {
             _ => None,
         })
         .collect();
-    let channels =
-        layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
-    Ok(Tile { window, width, height, attributes, channels })
+    Ok(Tile { window, width, height, attributes, channels: channels_of(layer) })
 }

@@ -6,8 +6,6 @@
 //! [`Overrides`]: super::Overrides
 //! [`Values`]: super::Values
 
-use std::fmt;
-
 use super::{EstimatorKind, flags::FlagValue};
 
 /// A parameter's default: one value, or one per estimator.
@@ -49,12 +47,6 @@ impl<T: Copy> EstimatorDefault<T> {
             EstimatorKind::Exact => self.exact,
             EstimatorKind::Paper => self.paper,
         }
-    }
-}
-
-impl<T: fmt::Display> fmt::Display for EstimatorDefault<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} (paper's estimator: {})", self.exact, self.paper)
     }
 }
 
