@@ -5,7 +5,7 @@
 mod common;
 
 use std::io::{BufRead as _, BufReader, Read as _, Write as _};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -23,30 +23,21 @@ struct Xvfb {
 }
 
 impl Xvfb {
+    /// Xvfb picks the number itself (`-displayfd`) and writes it once it accepts connections: it passes over
+    /// numbers in use and clears lock files left by servers that died, which tests running in separate
+    /// processes (nextest) could not agree on among themselves.
     fn start() -> Self {
-        // Tests start servers one at a time, so that two never pick the same free number.
-        static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
-        let _one = STARTING.lock().unwrap_or_else(|e| e.into_inner());
-        for n in 90..200 {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
-                continue;
-            }
-            let display = format!(":{n}");
-            let process = Command::new("Xvfb")
-                .args([&display, "-screen", "0", "320x240x24", "-nolisten", "tcp"])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("the viewer's tests need Xvfb: run scripts/setup.sh (apt package xvfb)");
-            let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
-            let start = Instant::now();
-            while !socket.exists() && start.elapsed() < Duration::from_secs(10) {
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            assert!(socket.exists(), "Xvfb {display} did not start");
-            return Self { display, process };
-        }
-        panic!("no free X display number in 90..200");
+        let mut process = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "320x240x24", "-nolisten", "tcp"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("the viewer's tests need Xvfb: run scripts/setup.sh (apt package xvfb)");
+        let mut number = String::new();
+        BufReader::new(process.stdout.take().unwrap()).read_line(&mut number).unwrap();
+        let number = number.trim();
+        assert!(!number.is_empty() && number.bytes().all(|b| b.is_ascii_digit()), "Xvfb did not start: {number:?}");
+        Self { display: format!(":{number}"), process }
     }
 
     /// `sensorlight view` of the Cornell box at `size` × `size`, driven by `script`, on this display.
@@ -78,8 +69,12 @@ impl Xvfb {
 }
 
 impl Drop for Xvfb {
+    /// SIGTERM, so that the server removes its lock file and socket (a SIGKILL leaves them behind).
     fn drop(&mut self) {
-        let _ = self.process.kill();
+        let terminated = Command::new("kill").args(["-TERM", &self.process.id().to_string()]).status();
+        if !terminated.is_ok_and(|s| s.success()) {
+            let _ = self.process.kill();
+        }
         let _ = self.process.wait();
     }
 }
