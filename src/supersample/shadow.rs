@@ -37,16 +37,22 @@ struct Point {
     luminance: f32,
 }
 
-/// [`SHADOW_RAYS`] × `SAMPLES` points on each light group, spread over its emitters in proportion to area
-/// (`hints::group_points`, as the light hints' points). Deterministic: a render's bytes do not change.
-/// Built once per renderer.
+/// Points on each light group, spread over its emitters in proportion to area (`hints::group_points`, as the
+/// light hints' points): [`SHADOW_RAYS`] × `SAMPLES` for a pixel's samples ([`ShadowPoints::new`]), or as
+/// many as asked for one point's whole share ([`ShadowPoints::share`]). Deterministic: a render's bytes do
+/// not change. Built once per renderer.
 pub struct ShadowPoints {
     groups: Vec<Vec<Point>>,
 }
 
 impl ShadowPoints {
+    /// The points a supersampled pixel's samples cast at.
     pub fn new(lights: &Lights) -> Self {
-        let count = SHADOW_RAYS * SAMPLES;
+        Self::with_count(lights, SHADOW_RAYS * SAMPLES)
+    }
+
+    /// `count` points on each group.
+    pub fn with_count(lights: &Lights, count: usize) -> Self {
         let groups = (lights.groups.iter())
             .map(|group| {
                 (hints::group_points(lights, group, count).into_iter())
@@ -76,32 +82,47 @@ impl ShadowPoints {
         groups: u32,
         k: usize,
     ) -> Visibility {
-        let origin = p + n * bias;
         let mut out = [-1.0; MAX_GROUPS];
         for (group, v) in out.iter_mut().enumerate().take(self.groups.len()) {
-            if groups & (1 << group) == 0 {
-                continue;
-            }
-            let (mut seen, mut total) = (0.0, 0.0);
-            for q in self.of_sample(group, k) {
-                let d = q.position - origin;
-                let length = d.length();
-                let weight = q.luminance * d.dot(n).max(0.0) * q.normal.dot(-d).max(0.0) / length.powi(4);
-                if weight <= 0.0 || length <= near {
-                    continue;
-                }
-                total += weight;
-                // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
-                if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
-                    seen += weight;
-                }
-            }
-            if total > 0.0 {
-                *v = seen / total;
+            if groups & (1 << group) != 0 {
+                *v = weighted_share(bvh, self.of_sample(group, k), (p, n), (bias, near)).unwrap_or(-1.0);
             }
         }
         out
     }
+
+    /// The share of `group`'s light that a sensor on the surface at `p` facing `n` receives unoccluded, by
+    /// every point of the group (weighed as in [`ShadowPoints::visibility`]); `None` where no point is above
+    /// the horizon and facing.
+    pub fn share(&self, bvh: &Bvh, (p, n): (Vec3, Vec3), offsets: (f32, f32), group: usize) -> Option<f32> {
+        weighted_share(bvh, self.groups[group].iter(), (p, n), offsets)
+    }
+}
+
+/// The unoccluded share of `points`' weights (radiance times the two cosines over the squared distance) seen
+/// from `p + n·bias`, from `near` on; `None` where none weighs.
+fn weighted_share<'a>(
+    bvh: &Bvh,
+    points: impl Iterator<Item = &'a Point>,
+    (p, n): (Vec3, Vec3),
+    (bias, near): (f32, f32),
+) -> Option<f32> {
+    let origin = p + n * bias;
+    let (mut seen, mut total) = (0.0, 0.0);
+    for q in points {
+        let d = q.position - origin;
+        let length = d.length();
+        let weight = q.luminance * d.dot(n).max(0.0) * q.normal.dot(-d).max(0.0) / length.powi(4);
+        if weight <= 0.0 || length <= near {
+            continue;
+        }
+        total += weight;
+        // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
+        if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
+            seen += weight;
+        }
+    }
+    (total > 0.0).then(|| seen / total)
 }
 
 /// Which of a pixel's [`SAMPLES`] sets of points its sample `k` casts at: a permutation of the sample
