@@ -48,7 +48,7 @@ uint cache_lookup(vec3 p, vec3 eye, uint surface, bool front) {
         if (slot.key == key) {
             uint reference = slot.entry;
             vec3 q = mix(p, eye, CACHE_SPLIT_PULL);
-            for (uint depth = 0u; depth < 8u && (reference & CACHE_SPLIT) != 0u; depth++) {
+            for (uint depth = 0u; depth < CACHE_SPLIT_DEPTH && (reference & CACHE_SPLIT) != 0u; depth++) {
                 GpuCacheSplit split = cache_splits[reference & ~CACHE_SPLIT];
                 reference = dot(split.plane.xyz, q) + split.plane.w >= 0.0 ? split.children.y : split.children.x;
             }

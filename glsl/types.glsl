@@ -142,6 +142,8 @@ struct GpuCacheSplit {
 };
 
 const uint CACHE_SPLIT = 0x80000000u;
+// Split nodes a lookup walks at most (src/gpu_types.rs CACHE_SPLIT_DEPTH: at least the deepest tree's).
+const uint CACHE_SPLIT_DEPTH = 8u;
 
 struct ReducePush {
     uint rd;             // sensor map side

@@ -201,3 +201,43 @@ fn shared_structs_match_glsl() {
         assert_eq!(glsl[&binding], expected, "{name}: (member offsets, size) in GLSL vs Rust");
     }
 }
+
+/// The integer constants `glsl/types.glsl` declares (`const uint NAME = VALUE;`), by name.
+fn glsl_constants() -> HashMap<String, u64> {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/glsl/types.glsl")).unwrap();
+    (text.lines())
+        .filter_map(|line| line.trim().strip_prefix("const uint "))
+        .map(|rest| {
+            let (name, value) = rest.split_once('=').unwrap();
+            let value = value.split(';').next().unwrap().trim().trim_end_matches('u');
+            let value = match value.strip_prefix("0x") {
+                Some(hex) => u64::from_str_radix(hex, 16).unwrap(),
+                None => value.parse().unwrap(),
+            };
+            (name.trim().to_owned(), value)
+        })
+        .collect()
+}
+
+/// Constants the shaders and the host both hold have one value: a bound the host relies on (the deepest
+/// split tree a lookup walks, the entry bits of a transport map) cannot drift apart unseen.
+#[test]
+fn shared_constants_match_glsl() {
+    use sensorlight::gpu_types as g;
+    let glsl = glsl_constants();
+    let rust: [(&str, u64); 10] = [
+        ("VIEW_EMITTERS_ONLY", g::VIEW_EMITTERS_ONLY as u64),
+        ("VIEW_ZOOM", g::VIEW_ZOOM as u64),
+        ("MAX_GROUPS", g::MAX_GROUPS as u64),
+        ("CACHE_ENTRY_BITS", g::CACHE_ENTRY_BITS as u64),
+        ("CACHE_SPLIT", sensorlight::gi::SPLIT as u64),
+        ("CACHE_SPLIT_DEPTH", g::CACHE_SPLIT_DEPTH as u64),
+        ("TRANSPORT_NONE", g::TRANSPORT_NONE as u64),
+        ("NO_SURFACE", sensorlight::scene::NO_SURFACE as u64),
+        ("CLUSTER_EMITTER", g::CLUSTER_EMITTER as u64),
+        ("NODE_LEAF", g::NODE_LEAF as u64),
+    ];
+    for (name, value) in rust {
+        assert_eq!(glsl.get(name), Some(&value), "{name}: glsl/types.glsl against Rust");
+    }
+}

@@ -52,6 +52,9 @@ pub const SAMPLES_PER_PIECE: usize = 8;
 /// two longest axes, so 2 levels leave parts a quarter of a cell wide.
 pub const MAX_LIGHT_LEVELS: u32 = 2;
 
+// Every split tree fits the shader's walk: [`MAX_SPLITS`] planes of other surfaces, then two a level.
+const _: () = assert!(MAX_SPLITS + 2 * MAX_LIGHT_LEVELS <= crate::gpu_types::CACHE_SPLIT_DEPTH);
+
 /// A piece is halved where the share of the lights' hint points its spread points see differs by more than
 /// this (`sensors::hints`): a shadow's edge or a streak of light crossing it. Any difference at all would
 /// halve the pieces of every soft penumbra (2.8× the Cornell box's entries for no gain in its error); a
