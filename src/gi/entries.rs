@@ -476,7 +476,7 @@ fn visible(bvh: &Bvh, grid: &Grid, from: Vec3, n: Vec3, to: Vec3, n_to: Vec3) ->
         let (a, b) = (from + n * (side * lift), to + n_to * (side * lift));
         let d = b - a;
         let length = d.length();
-        length <= lift || bvh.intersect(&Ray::new(a, d / length), 0.0, length * (1.0 - 1e-4)).is_none()
+        length <= lift || !bvh.occluded(&Ray::new(a, d / length), 0.0, length * (1.0 - 1e-4))
     })
 }
 

@@ -330,7 +330,7 @@ impl<'a> Integrator<'a> {
             return Vec3::ZERO;
         }
         *rays += 1;
-        if self.bvh.intersect(&Ray::new(sensor.origin, dir), self.near, f32::INFINITY).is_some() {
+        if self.bvh.occluded(&Ray::new(sensor.origin, dir), self.near, f32::INFINITY) {
             return Vec3::ZERO;
         }
         let (p_sky, p_cosine) = (p_sky as f64, local.z as f64 / PI);

@@ -120,7 +120,7 @@ pub fn inside(mesh: &Mesh) -> Result<Option<Camera>> {
         let sees_light = |(p, n): (Vec3, Vec3)| {
             points.iter().any(|&(q, m)| {
                 let d = q - p;
-                d.dot(n) > 0.0 && m.dot(d) < 0.0 && bvh.intersect(&Ray::new(p + n * eps, d), 0.0, 1.0 - 1e-4).is_none()
+                d.dot(n) > 0.0 && m.dot(d) < 0.0 && !bvh.occluded(&Ray::new(p + n * eps, d), 0.0, 1.0 - 1e-4)
             })
         };
         let lit = |(d, h): &(Vec3, Option<super::bvh::Hit>)| -> f32 {

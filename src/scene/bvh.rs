@@ -49,6 +49,13 @@ impl Cutouts {
     }
 }
 
+/// Where a walk along a ray stops: at the nearest hit, or at any (a shadow ray's question).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Stop {
+    Nearest,
+    Any,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
@@ -118,14 +125,33 @@ impl Bvh {
 
     /// The nearest hit in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.first_hit(ray, (t_min, t_max), Stop::Nearest)
+    }
+
+    /// Whether any triangle (cut-outs passed through) lies along `ray` in `(t_min, t_max)`: a shadow ray's
+    /// question, answered at the first hit the walk meets rather than the nearest. The same answer as
+    /// `intersect(..).is_some()`, for less of the tree.
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.first_hit(ray, (t_min, t_max), Stop::Any).is_some()
+    }
+
+    fn first_hit(&self, ray: &Ray, (t_min, t_max): (f32, f32), stop: Stop) -> Option<Hit> {
         match &self.cutouts {
-            Some(c) => self.intersect_where(ray, t_min, t_max, |k, t| c.opaque(k, &self.vertices[k], ray.at(t))),
-            None => self.intersect_where(ray, t_min, t_max, |_, _| true),
+            Some(c) => self.intersect_where(ray, t_min, t_max, stop, |k, t| c.opaque(k, &self.vertices[k], ray.at(t))),
+            None => self.intersect_where(ray, t_min, t_max, stop, |_, _| true),
         }
     }
 
-    /// The nearest hit in `(t_min, t_max)` that `accept(stored triangle, t)`.
-    fn intersect_where(&self, ray: &Ray, t_min: f32, t_max: f32, accept: impl Fn(usize, f32) -> bool) -> Option<Hit> {
+    /// The nearest hit in `(t_min, t_max)` that `accept(stored triangle, t)`, or with [`Stop::Any`] the first
+    /// one found.
+    fn intersect_where(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        stop: Stop,
+        accept: impl Fn(usize, f32) -> bool,
+    ) -> Option<Hit> {
         let shear = RayShear::new(ray);
         let inv = ray.dir.recip();
         let mut best: Option<Hit> = None;
@@ -147,6 +173,9 @@ impl Bvh {
                     {
                         t_best = t;
                         best = Some(Hit { t, triangle: self.order[k] });
+                        if stop == Stop::Any {
+                            return best;
+                        }
                     }
                 }
                 continue;
@@ -300,6 +329,10 @@ mod tests {
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             let fast = bvh.intersect(&ray, 0.0, f32::INFINITY);
             assert_eq!(brute.map(|(t, i)| (t, i as u32)), fast.map(|h| (h.t, h.triangle)));
+            // A shadow ray to a point along it: blocked exactly where a triangle lies nearer than the point.
+            let t_max = 0.5 + 12.0 * lcg(&mut s);
+            let blocked = brute.is_some_and(|(t, _)| t < t_max);
+            assert_eq!(bvh.occluded(&ray, 0.0, t_max), blocked, "ray {ray:?} to t = {t_max}");
         }
     }
 }

@@ -131,7 +131,7 @@ pub fn masks(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, 
         }
         facing |= 1 << k;
         // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
-        if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
+        if !bvh.occluded(&Ray::new(origin, d), near / length, 1.0 - 1e-4) {
             mask |= 1 << k;
         }
     }

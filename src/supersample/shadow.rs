@@ -118,7 +118,7 @@ fn weighted_share<'a>(
         }
         total += weight;
         // t in multiples of d: the point itself is at 1; stop just short of its own triangle.
-        if bvh.intersect(&Ray::new(origin, d), near / length, 1.0 - 1e-4).is_none() {
+        if !bvh.occluded(&Ray::new(origin, d), near / length, 1.0 - 1e-4) {
             seen += weight;
         }
     }
@@ -189,7 +189,7 @@ mod tests {
                 let d = e.v[0] + (e.v[1] - e.v[0]) * u + (e.v[2] - e.v[0]) * v - origin;
                 let weight = (d.dot(n).max(0.0) * normal.dot(-d).max(0.0) / d.length().powi(4)) as f64;
                 total += weight;
-                if bvh.intersect(&Ray::new(origin, d), offsets.1 / d.length(), 1.0 - 1e-4).is_none() {
+                if !bvh.occluded(&Ray::new(origin, d), offsets.1 / d.length(), 1.0 - 1e-4) {
                     seen += weight;
                 }
             }
