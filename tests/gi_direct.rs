@@ -40,8 +40,9 @@ fn the_light_through_the_door_s_gap_reaches_the_cache_as_the_oracle_says() {
         background: Vec3::ZERO,
     };
     let oracle = Integrator::new(&scene, direct, SAMPLES, 7).unwrap();
-    // Room A's entries facing into it (the door's and the walls' sides in A included); an entry whose light
-    // varies over its piece takes the mean over the points spread over it.
+    // Room A's entries, both sides of each piece (the sides facing out of the shell are dark to both and
+    // fall out of the lit set); an entry whose light varies over its piece takes the mean over the points
+    // spread over it.
     let in_a: Vec<usize> = (0..entries.len()).filter(|&i| entries[i].point.z > ROOM_A + 1e-3).collect();
     let spread_of = |i: usize| spread.iter().find(|(pair, _)| *pair as usize == i / 2).map(|(_, p)| p);
     // (area, the cache's R, the oracle's R, the oracle's standard error), luminance.

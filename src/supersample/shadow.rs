@@ -39,8 +39,8 @@ struct Point {
 
 /// Points on each light group, spread over its emitters in proportion to area (`hints::group_points`, as the
 /// light hints' points): [`SHADOW_RAYS`] × `SAMPLES` for a pixel's samples ([`ShadowPoints::new`]), or as
-/// many as asked for one point's whole share ([`ShadowPoints::share`]). Deterministic: a render's bytes do
-/// not change. Built once per renderer.
+/// many as asked for one point's whole share ([`ShadowPoints::share`]: the radiance cache's direct light).
+/// Deterministic: a render's bytes do not change.
 pub struct ShadowPoints {
     groups: Vec<Vec<Point>>,
 }
