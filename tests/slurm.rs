@@ -174,7 +174,7 @@ fn bad_jobs_are_refused_before_anything_is_written_and_a_dry_run_writes_the_scri
     let cornell = "scenes/cornell/cornell.toml";
     for (args, expected) in [
         (vec![cornell, "-o", o, "--tiles", "40", "--height", "36"], "--tiles 40: --image-tile 1/40: 40 tiles of rows"),
-        (vec![cornell, "-o", o, "--frames", "0..2"], "--frames needs a camera path"),
+        (vec![cornell, "-o", o, "--frames", "0..2"], "--frame and --frames need a camera path"),
         (vec!["scenes/cornell/fly.toml", "-o", o, "--frames", "20..30"], "frame 30 is after the path's end"),
         (vec![cornell, "-o", o], "--tiles <N>"),
         (vec![cornell, "-o", o, "--tiles", "2", "--frames", "0..1"], "cannot be used with"),

@@ -84,18 +84,7 @@ pub fn run(args: SlurmArgs) -> Result<ExitCode> {
         TileSpec { index: 1, count: n }.rows(size).map_err(|e| anyhow::anyhow!("--tiles {n}: {e:#}"))?;
     }
     if let Some(range) = args.frames {
-        let path = scene.camera_path.as_ref().with_context(|| {
-            format!("--frames needs a camera path: {} has no [path] (docs/USAGE.md, \"Frames\")", args.scene.display())
-        })?;
-        ensure!(
-            range.last <= path.last_frame(),
-            "--frames {}..{}: frame {} is after the path's end (frame {} at {} fps)",
-            range.first,
-            range.last,
-            range.last,
-            path.last_frame(),
-            path.fps
-        );
+        super::frames::path_of(&scene, &[Some(range.first), Some(range.last)])?;
     }
     ensure!(
         super::OutputKind::of(&args.output)? == super::OutputKind::Exr,
