@@ -6,6 +6,7 @@ mod common;
 
 use glam::Vec3;
 use rayon::prelude::*;
+use sensorlight::light::groups::luminance;
 use sensorlight::params::{Bounces, EstimatorParams, FrameParams, Indirect};
 use sensorlight::reference::integrator::Integrator;
 use sensorlight::renderer::{CacheConfig, Quiet, Renderer};
@@ -13,7 +14,6 @@ use sensorlight::scene::Scene;
 use sensorlight::sensors::SensorKind;
 use sensorlight::strategy::StrategyKind;
 
-const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 /// Room A's side of the dividing wall (`scripts/make_hard_scenes.py`): z above A's face, -2.
 const ROOM_A: f32 = -2.0;
 /// Oracle samples per point: 4 096 leave ~7 % noise at a point that sees 5 % of the panel, ~0.3 % in the sum.
@@ -54,9 +54,9 @@ fn the_light_through_the_door_s_gap_reaches_the_cache_as_the_oracle_says() {
             let estimates: Vec<_> =
                 points.iter().enumerate().map(|(k, &p)| oracle.radiance(p, e.normal, (i * 8 + k) as u64)).collect();
             let r = estimates.iter().map(|x| x.mean).sum::<Vec3>() / points.len() as f32;
-            let variance = estimates.iter().map(|x| x.std_error.dot(LUMINANCE).powi(2)).sum::<f32>();
+            let variance = estimates.iter().map(|x| luminance(x.std_error).powi(2)).sum::<f32>();
             let cached = values[i].truncate() / albedo[i].max(Vec3::splat(1e-6));
-            let lum = |v: Vec3| v.dot(LUMINANCE) as f64;
+            let lum = |v: Vec3| luminance(v) as f64;
             [e.area as f64, lum(cached), lum(r), (variance.sqrt() / points.len() as f32) as f64]
         })
         .collect();

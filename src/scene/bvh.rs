@@ -125,17 +125,18 @@ impl Bvh {
 
     /// The nearest hit in `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        self.first_hit(ray, (t_min, t_max), Stop::Nearest)
+        self.walk(ray, (t_min, t_max), Stop::Nearest)
     }
 
     /// Whether any triangle (cut-outs passed through) lies along `ray` in `(t_min, t_max)`: a shadow ray's
     /// question, answered at the first hit the walk meets rather than the nearest. The same answer as
     /// `intersect(..).is_some()`, for less of the tree.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.first_hit(ray, (t_min, t_max), Stop::Any).is_some()
+        self.walk(ray, (t_min, t_max), Stop::Any).is_some()
     }
 
-    fn first_hit(&self, ray: &Ray, (t_min, t_max): (f32, f32), stop: Stop) -> Option<Hit> {
+    /// The walk along `ray` that `stop` asks for, cut-outs passed through.
+    fn walk(&self, ray: &Ray, (t_min, t_max): (f32, f32), stop: Stop) -> Option<Hit> {
         match &self.cutouts {
             Some(c) => self.intersect_where(ray, t_min, t_max, stop, |k, t| c.opaque(k, &self.vertices[k], ray.at(t))),
             None => self.intersect_where(ray, t_min, t_max, stop, |_, _| true),
