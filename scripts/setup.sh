@@ -33,7 +33,11 @@ packages=(
     libxkbcommon-x11-0 xvfb x11-apps
     # A private single-node cluster for `sensorlight slurm` and its tests (scripts/slurm-local.sh).
     slurm-wlm munge
+    # The real glTF client for `sensorlight bake`'s lightmaps: three.js in headless Chromium (scripts/threejs).
+    chromium nodejs
 )
+# npm too, unless there is one already: NodeSource's nodejs package bundles npm and conflicts with Debian's.
+command -v npm >/dev/null || packages+=(npm)
 
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
@@ -48,6 +52,16 @@ if [ ${#missing[@]} -gt 0 ]; then
     $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
 else
     echo "setup: system packages already installed"
+fi
+
+# three.js for scripts/threejs, as its package-lock.json pins it (reinstalled when the lock is newer than what
+# npm last installed).
+threejs="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/threejs"
+if [ ! -f "$threejs/node_modules/.package-lock.json" ] || [ "$threejs/package-lock.json" -nt "$threejs/node_modules/.package-lock.json" ]; then
+    echo "setup: installing three.js into scripts/threejs/node_modules (npm ci)"
+    (cd "$threejs" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+else
+    echo "setup: three.js already installed in scripts/threejs/node_modules"
 fi
 
 if ! command -v cargo >/dev/null; then

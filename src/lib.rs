@@ -16,6 +16,7 @@
 //!   [`cancel`]: stopping a render part-way (SIGINT, SIGTERM), cleanly;
 //! - [`viewer`]: a window that shows a render converging and restarts it as the camera moves.
 
+pub mod bake;
 pub mod bench;
 pub mod cancel;
 pub mod clusters;
@@ -25,6 +26,7 @@ pub mod gi;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod light;
+pub mod lightmap;
 pub mod metrics;
 pub mod output;
 pub mod params;

@@ -90,35 +90,14 @@ fn a_plane_under_the_sky_reflects_the_sky() {
 #[test]
 fn light_does_not_cross_a_thin_wall() {
     for thickness in [0.0f32, 0.02] {
-        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
-        // x in [-2, 2], y in [0, 2], z in [-1, 1]; the wall at x = 0; the light on the ceiling over x > 0.
-        let c = y;
-        let mut groups = vec![
-            ("floor", 0, common::rect(Vec3::ZERO, x * 2.0, z, y)),
-            ("ceiling", 0, common::rect(2.0 * y, x * 2.0, z, -y)),
-            ("back", 0, common::rect(c - z, x * 2.0, y, z)),
-            ("front", 0, common::rect(c + z, x * 2.0, y, -z)),
-            ("left", 0, common::rect(c - 2.0 * x, z, y, x)),
-            ("right", 0, common::rect(c + 2.0 * x, z, y, -x)),
-            ("light", 1, common::rect(Vec3::new(1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)),
-        ];
-        if thickness == 0.0 {
-            groups.push(("wall", 0, common::rect(c, z, y, x)));
-        } else {
-            for (n, u, v, half) in [(x, z, y, thickness / 2.0), (-x, z, y, thickness / 2.0)] {
-                groups.push(("wall", 0, common::rect(c + n * half, u, v, n)));
-            }
-        }
-        let camera = Camera::look_at(Vec3::new(-1.8, 1.5, 0.8), Vec3::new(0.0, 0.3, -0.3), y, 70.0).unwrap();
-        let materials = vec![common::material("white", 0.8, 0.0), common::material("light", 0.8, 50.0)];
-        let scene = common::scene(groups, materials, camera, (24, 24));
+        let scene = common::two_rooms(thickness, (24, 24));
         let out = render_gi(&scene, Bounces::Converged, Vec3::ZERO, (16, 8));
         let dark = out.image.iter().zip(&out.gbuffer.position).filter(|(_, p)| p.w > 0.0 && p.x < -1e-3);
         let brightest = dark.map(|(c, _)| c.truncate().max_element()).fold(0.0, f32::max);
         assert!(brightest == 0.0, "thickness {thickness}: a pixel of the dark room is {brightest}");
         // The lit room is lit: the same camera turned to it.
         let mut lit = scene.clone();
-        lit.camera = Camera::look_at(Vec3::new(1.8, 1.5, 0.8), Vec3::new(0.0, 0.3, -0.3), y, 70.0).unwrap();
+        lit.camera = Camera::look_at(Vec3::new(1.8, 1.5, 0.8), Vec3::new(0.0, 0.3, -0.3), Vec3::Y, 70.0).unwrap();
         let out = render_gi(&lit, Bounces::Converged, Vec3::ZERO, (16, 8));
         let seen = out.image.iter().zip(&out.gbuffer.position).filter(|(_, p)| p.w > 0.0 && p.x > 1e-3);
         assert!(seen.map(|(c, _)| c.x).fold(f32::INFINITY, f32::min) > 0.0, "every pixel of the lit room is lit");

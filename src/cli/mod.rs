@@ -10,6 +10,7 @@ macro_rules! say {
 }
 
 mod args;
+mod bake;
 mod bench;
 mod cache;
 mod compare;
@@ -77,6 +78,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Reproduce the paper's metrics (Table I, Fig. 10, Fig. 11) on this device.
     Metrics(metrics::MetricsArgs),
+    /// Bake a lightmap onto every surface: a glTF binary (.glb) with TEXCOORD_1 and the lightmap EXR beside it.
+    Bake(bake::BakeArgs),
     /// Watch a scene render in a window: it converges round by round and starts again as the camera moves.
     View(view::ViewArgs),
 }
@@ -98,6 +101,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench(args) => bench::run(args),
         Command::Metrics(args) => metrics::run(args),
         Command::View(args) => view::run(args),
+        Command::Bake(args) => bake::run(args),
     }
 }
 

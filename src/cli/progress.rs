@@ -40,6 +40,24 @@ pub const SENSORS_TYPICAL: f64 = 60.0;
 /// The phase name of the radiance cache's bounces.
 const BOUNCES: &str = "radiance cache";
 
+/// What the bar counts: a render's pixels resolved (by sensing or interpolation, round by round), or a
+/// bake's texels, each sensed once: their number is known up front, and so is the estimate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Measure {
+    #[default]
+    Pixels,
+    Texels,
+}
+
+impl Measure {
+    fn text(self) -> &'static str {
+        match self {
+            Self::Pixels => "of pixels resolved",
+            Self::Texels => "of texels baked",
+        }
+    }
+}
+
 /// Where a render's previews go: `path` rewritten after every `every` rounds.
 pub struct Preview {
     pub every: u32,
@@ -65,6 +83,7 @@ struct Shared {
 #[derive(Default)]
 struct State {
     phase: &'static str,
+    measure: Measure,
     pixels: u64,
     resolved: u64,
     round: u32,
@@ -92,22 +111,31 @@ impl RenderProgress {
     /// A display for a render of `pixels` pixels (0: no image, the radiance cache alone), starting with the
     /// strategy choice; the render stops between batches once `cancel` is set.
     pub fn new(pixels: u64, preview: Option<Preview>, cancel: Cancel) -> Self {
+        Self::with_measure(pixels, Measure::Pixels, preview, cancel)
+    }
+
+    /// A display for a bake of `texels` texels.
+    pub fn for_texels(texels: u64, cancel: Cancel) -> Self {
+        Self::with_measure(texels, Measure::Texels, None, cancel)
+    }
+
+    fn with_measure(pixels: u64, measure: Measure, preview: Option<Preview>, cancel: Cancel) -> Self {
         let show = say::normal();
         let terminal = std::io::stderr().is_terminal();
         let bar = (show && terminal).then(|| {
             let bar = ProgressBar::new(pixels.max(1));
             // No pixels (`sensorlight cache`): the phase alone.
             let template = match pixels {
-                0 => "{spinner} {elapsed:>4} {msg}",
-                _ => "{spinner} {elapsed:>4} [{bar:30}] {percent:>3}% of pixels resolved · {msg}",
+                0 => "{spinner} {elapsed:>4} {msg}".to_owned(),
+                _ => format!("{{spinner}} {{elapsed:>4}} [{{bar:30}}] {{percent:>3}}% {} · {{msg}}", measure.text()),
             };
-            let style = ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
+            let style = ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
             bar.set_style(style.progress_chars("=> "));
             bar.enable_steady_tick(Duration::from_millis(200));
             bar
         });
         let lines = show && !terminal;
-        let state = State { phase: "choosing the batching strategy", pixels, ..State::default() };
+        let state = State { phase: "choosing the batching strategy", measure, pixels, ..State::default() };
         let shared = Arc::new(Shared { bar, lines, start: Instant::now(), state: Mutex::new(state) });
         shared.update(false);
         let ticker = lines.then(|| {
@@ -175,7 +203,10 @@ impl Shared {
         let rate = (elapsed >= 1.0 && s.phase_done > 0).then(|| s.phase_done as f64 / elapsed);
         let mut what = s.phase.to_owned();
         if s.round > 0 && s.phase == "sensing" {
-            what = format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued);
+            what = match s.measure {
+                Measure::Pixels => format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued),
+                Measure::Texels => format!("{}/{} texels", s.round_done, s.round_queued),
+            };
         }
         if let (Some(level), BOUNCES) = (s.cache_level, s.phase) {
             let sensed = level.reached - level.sensors + s.round_done.min(level.sensors);
@@ -208,7 +239,7 @@ impl Shared {
         if force || tenths > s.tenths_said || due {
             let resolved = match s.pixels {
                 0 => String::new(),
-                n => format!("{:3.0} % of pixels resolved; ", 100.0 * s.resolved as f64 / n as f64),
+                n => format!("{:3.0} % {}; ", 100.0 * s.resolved as f64 / n as f64, s.measure.text()),
             };
             sensorlight::errln!("[{:6.1} s] {resolved}{what}", self.start.elapsed().as_secs_f64());
             s.tenths_said = tenths;
@@ -235,6 +266,16 @@ impl Shared {
         };
         s.estimated = true;
         let seconds = |ratio: f64| first as f64 * ratio * per_sensor;
+        if s.measure == Measure::Texels {
+            // One sensor a texel: the total is known.
+            return (seconds(1.0) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
+                format!(
+                    "estimate: {} ({first} texels at {:.2} ms a texel, {source})",
+                    duration(seconds(1.0)),
+                    per_sensor * 1e3
+                )
+            });
+        }
         let (low, high) = SENSORS_OVER_FIRST_GRID;
         (seconds(SENSORS_TYPICAL) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
             format!(
@@ -293,6 +334,9 @@ impl Progress for RenderProgress {
             let mut s = self.shared.lock();
             s.round_done += n;
             s.sensors_done += n;
+            if s.measure == Measure::Texels && s.phase == "sensing" {
+                s.resolved += n;
+            }
             s.phase_done += n;
             let done = s.sensors_done;
             s.first_batch.get_or_insert((Instant::now(), done));

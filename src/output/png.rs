@@ -70,12 +70,21 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()
 
 /// Encodes 8-bit sRGB RGB bytes as a PNG into `w`.
 pub fn encode_rgb8(w: &mut impl Write, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    encode_8bit(w, (width, height), png::ColorType::Rgb, rgb)
+}
+
+/// Encodes sRGB-encoded RGBA, 8 bits a channel, alpha linear (a baked scene's base colour textures).
+pub fn encode_rgba8(w: &mut impl Write, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    encode_8bit(w, (width, height), png::ColorType::Rgba, rgba)
+}
+
+fn encode_8bit(w: &mut impl Write, (width, height): (u32, u32), color: png::ColorType, data: &[u8]) -> Result<()> {
     let mut encoder = png::Encoder::new(w, width, height);
-    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_color(color);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
     let mut writer = encoder.write_header()?;
-    writer.write_image_data(rgb)?;
+    writer.write_image_data(data)?;
     writer.finish()?;
     Ok(())
 }

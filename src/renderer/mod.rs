@@ -14,6 +14,7 @@ mod config;
 pub mod detail;
 mod estimate;
 mod gi;
+mod points;
 mod post;
 mod preview;
 mod probe;

@@ -99,6 +99,33 @@ pub fn scene(
     sensorlight::scene::builtin::from_groups(groups, materials, camera, ImageSize { width: size.0, height: size.1 })
 }
 
+/// Two rooms under one floor and one ceiling (x in [-2, 2], y in [0, 2], z in [-1, 1]), divided at x = 0 by
+/// a wall of `thickness` (0: one quad), a light on the ceiling over x > 0 only; the camera in the dark room,
+/// `size` pixels.
+pub fn two_rooms(thickness: f32, size: (u32, u32)) -> Scene {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let c = y;
+    let mut groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, x * 2.0, z, y)),
+        ("ceiling", 0, rect(2.0 * y, x * 2.0, z, -y)),
+        ("back", 0, rect(c - z, x * 2.0, y, z)),
+        ("front", 0, rect(c + z, x * 2.0, y, -z)),
+        ("left", 0, rect(c - 2.0 * x, z, y, x)),
+        ("right", 0, rect(c + 2.0 * x, z, y, -x)),
+        ("light", 1, rect(Vec3::new(1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)),
+    ];
+    if thickness == 0.0 {
+        groups.push(("wall", 0, rect(c, z, y, x)));
+    } else {
+        for n in [x, -x] {
+            groups.push(("wall", 0, rect(c + n * (thickness / 2.0), z, y, n)));
+        }
+    }
+    let camera = Camera::look_at(Vec3::new(-1.8, 1.5, 0.8), Vec3::new(0.0, 0.3, -0.3), y, 70.0).unwrap();
+    let materials = vec![material("white", 0.8, 0.0), material("light", 0.8, 50.0)];
+    scene(groups, materials, camera, size)
+}
+
 /// A closed cube of side 2 centred at the origin, every face emitting `ke` towards the inside, camera inside.
 pub fn furnace(ke: f32) -> Scene {
     let mut tris = Vec::new();

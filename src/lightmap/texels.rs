@@ -1,0 +1,226 @@
+//! Which surface point each texel of the atlas stands for: the triangles rasterised in their lightmap
+//! coordinates. A texel whose centre a triangle covers takes that point; a texel just outside a chart (its
+//! centre within [`REACH`] of it) takes the chart's nearest point, so that bilinear filtering at the chart's
+//! border blends values of its own surface and never the gutter's. Points inside geometry (a floor under a
+//! box, under a wall) are moved to a part of the texel's footprint that is outside, or the texel is left to
+//! its neighbours: such a point sees only the inside of what covers it, and its light would leak out
+//! through bilinear filtering (lightmapper.h's users fight exactly this).
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::unwrap::Unwrapped;
+use crate::gbuffer::GBufferData;
+use crate::scene::bvh::Bvh;
+use crate::scene::{ImageSize, Mesh, NO_SURFACE, Ray, at_barycentric};
+
+/// How far outside a chart (in texels, from the texel's centre) a texel still takes the chart's nearest
+/// point: its 8 neighbours' centres are within √2 of the border, and charts lie 2 × `GUTTER` = 4 apart.
+pub const REACH: f32 = 1.5;
+
+/// What a texel stands for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexelPoint {
+    pub triangle: u32,
+    /// Barycentric weights of corners 1 and 2.
+    pub bary: Vec2,
+}
+
+/// Every page's texels, page after page, row by row from the top.
+#[derive(Clone, Debug)]
+pub struct Texels {
+    pub width: u32,
+    pub height: u32,
+    pub pages: u32,
+    pub points: Vec<Option<TexelPoint>>,
+    /// Texels whose own point lay inside geometry and were moved within their footprint, and those left
+    /// to their neighbours (no point of their footprint outside).
+    pub moved: u64,
+    pub buried: u64,
+}
+
+/// The texel's point candidate: its distance from the texel's centre (texels; 0 inside), the triangle and
+/// the barycentric weights.
+type Candidate = (f32, u32, Vec2);
+
+impl Texels {
+    /// Rasterises `unwrapped`'s triangles of `mesh`; `bvh` (of the whole mesh) finds points inside geometry,
+    /// `bias` (scene units) lifts their test rays off the surface as the sensors are lifted.
+    pub fn rasterise(mesh: &Mesh, bvh: &Bvh, unwrapped: &Unwrapped, bias: f32) -> Self {
+        let (w, h, pages) = (unwrapped.width, unwrapped.height, unwrapped.pages);
+        let page_texels = w as usize * h as usize;
+        let mut best: Vec<Option<Candidate>> = vec![None; page_texels * pages as usize];
+        let size = Vec2::new(w as f32, h as f32);
+        for (t, uv) in unwrapped.uv.iter().enumerate() {
+            let c = uv.map(|p| p * size);
+            let (lo, hi) = (c[0].min(c[1]).min(c[2]) - REACH, c[0].max(c[1]).max(c[2]) + REACH);
+            let (x0, y0) = ((lo.x.floor().max(0.0)) as u32, (lo.y.floor().max(0.0)) as u32);
+            let (x1, y1) = ((hi.x.ceil() as u32).min(w), (hi.y.ceil() as u32).min(h));
+            let base = unwrapped.page[t] as usize * page_texels;
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let Some((d, bary)) = nearest(&c, q) else { continue };
+                    let slot = &mut best[base + y as usize * w as usize + x as usize];
+                    if d <= REACH && slot.is_none_or(|(best, _, _)| d < best) {
+                        *slot = Some((d, t as u32, bary));
+                    }
+                }
+            }
+        }
+        // Points inside geometry: moved within the texel's footprint, else left to the neighbours.
+        let texel = 1.0 / size;
+        let moves: Vec<(Option<TexelPoint>, u8)> = best
+            .par_iter()
+            .enumerate()
+            .map(|(i, candidate)| {
+                let Some((_, triangle, bary)) = *candidate else { return (None, 0) };
+                let point = TexelPoint { triangle, bary };
+                if !inside(mesh, bvh, point, bias) {
+                    return (Some(point), 0);
+                }
+                let j = i % page_texels;
+                let centre = Vec2::new((j % w as usize) as f32 + 0.5, (j / w as usize) as f32 + 0.5) * texel;
+                let uv = &unwrapped.uv[triangle as usize];
+                let moved = footprint(centre, texel)
+                    .filter_map(|p| barycentric_2d(uv, p).filter(|b| in_triangle(*b)))
+                    .map(|bary| TexelPoint { triangle, bary })
+                    .find(|p| !inside(mesh, bvh, *p, bias));
+                match moved {
+                    Some(p) => (Some(p), 1),
+                    None => (None, 2),
+                }
+            })
+            .collect();
+        let moved = moves.iter().filter(|(_, m)| *m == 1).count() as u64;
+        let buried = moves.iter().filter(|(_, m)| *m == 2).count() as u64;
+        Texels { width: w, height: h, pages, points: moves.into_iter().map(|(p, _)| p).collect(), moved, buried }
+    }
+
+    /// The texels with a point.
+    pub fn count(&self) -> usize {
+        self.points.iter().filter(|p| p.is_some()).count()
+    }
+
+    /// The texels' points as a G-buffer (one row, texel i at pixel i; no surface where a texel has no
+    /// point), each facing its triangle's front: what `Renderer::sense_points` senses.
+    pub fn gbuffer(&self, mesh: &Mesh) -> GBufferData {
+        let n = self.points.len();
+        let mut g = GBufferData {
+            size: ImageSize { width: n as u32, height: 1 },
+            position: vec![Vec4::ZERO; n],
+            normal: vec![Vec4::ZERO; n],
+            albedo: vec![Vec4::ZERO; n],
+            emission: vec![Vec4::ZERO; n],
+            surface: vec![NO_SURFACE; n],
+        };
+        for (i, p) in self.points.iter().enumerate() {
+            let Some(p) = p else { continue };
+            let t = p.triangle as usize;
+            let position = point_of(mesh, *p);
+            let tri = &mesh.triangles[t];
+            let emits = mesh.material_of(tri.surface).is_emitter();
+            g.position[i] = position.extend(1.0);
+            g.normal[i] = mesh.shading_normal(t, position).extend(1.0);
+            g.albedo[i] = mesh.albedo_at(t, position).extend(1.0);
+            g.emission[i] = if emits { mesh.emission_at(t, position) } else { Vec3::ZERO }.extend(1.0);
+            g.surface[i] = tri.surface;
+        }
+        g
+    }
+}
+
+/// The surface point a texel stands for.
+pub fn point_of(mesh: &Mesh, p: TexelPoint) -> Vec3 {
+    at_barycentric(&mesh.triangles[p.triangle as usize].v, p.bary)
+}
+
+/// Directions a point's inside test casts rays along, in its tangent frame (x, y tangent, z the normal):
+/// eight around the horizon, 15° up, where the walls of whatever covers the point are met; and straight up.
+const INSIDE_RAYS: usize = 9;
+
+/// Whether the point `p` lies inside geometry: most of its test rays meet a back face first (the inside of
+/// a box resting on it, of a wall standing across it). A point in the open sees fronts, or nothing.
+fn inside(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> bool {
+    let t = &mesh.triangles[p.triangle as usize];
+    let n = t.normal;
+    let origin = point_of(mesh, p) + n * bias;
+    let (x, y) = n.any_orthonormal_pair();
+    let (s, c) = 15f32.to_radians().sin_cos();
+    let mut backs = 0;
+    for k in 0..INSIDE_RAYS {
+        let dir = if k + 1 == INSIDE_RAYS {
+            n
+        } else {
+            let a = k as f32 * std::f32::consts::TAU / (INSIDE_RAYS - 1) as f32;
+            (x * a.cos() + y * a.sin()) * c + n * s
+        };
+        if let Some(hit) = bvh.intersect(&Ray::new(origin, dir), 0.0, f32::INFINITY) {
+            backs += (dir.dot(mesh.triangles[hit.triangle as usize].normal) > 0.0) as usize;
+        }
+    }
+    2 * backs > INSIDE_RAYS
+}
+
+/// A 4 × 4 grid of points over the texel of `centre` and size `texel` (atlas coordinates), nearest the
+/// centre first.
+fn footprint(centre: Vec2, texel: Vec2) -> impl Iterator<Item = Vec2> {
+    let mut offsets: Vec<Vec2> = (0..16).map(|k| Vec2::new((k % 4) as f32 - 1.5, (k / 4) as f32 - 1.5) / 4.0).collect();
+    offsets.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
+    offsets.into_iter().map(move |o| centre + o * texel)
+}
+
+/// The barycentric weights of corners 1 and 2 of `q` in the 2D triangle `c` (`None` if degenerate).
+fn barycentric_2d(c: &[Vec2; 3], q: Vec2) -> Option<Vec2> {
+    let (e1, e2, d) = (c[1] - c[0], c[2] - c[0], q - c[0]);
+    let det = e1.perp_dot(e2);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    Some(Vec2::new(d.perp_dot(e2), e1.perp_dot(d)) / det)
+}
+
+fn in_triangle(b: Vec2) -> bool {
+    b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0
+}
+
+/// The distance from `q` to the 2D triangle `c` (0 inside) and the barycentric weights of its nearest point;
+/// `None` for a degenerate triangle.
+fn nearest(c: &[Vec2; 3], q: Vec2) -> Option<(f32, Vec2)> {
+    let b = barycentric_2d(c, q)?;
+    if in_triangle(b) {
+        return Some((0.0, b));
+    }
+    // Outside: the nearest point lies on an edge.
+    let mut best: Option<(f32, Vec2)> = None;
+    for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+        let (a, e) = (c[i], c[j] - c[i]);
+        let s = ((q - a).dot(e) / e.length_squared().max(1e-20)).clamp(0.0, 1.0);
+        let p = a + e * s;
+        let d = p.distance(q);
+        if best.is_none_or(|(bd, _)| d < bd) {
+            let mut w = [0.0f32; 3];
+            w[i] = 1.0 - s;
+            w[j] = s;
+            best = Some((d, Vec2::new(w[1], w[2])));
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_inside_and_outside() {
+        let c = [Vec2::ZERO, Vec2::new(4.0, 0.0), Vec2::new(0.0, 4.0)];
+        let (d, b) = nearest(&c, Vec2::new(1.0, 1.0)).unwrap();
+        assert_eq!(d, 0.0);
+        assert!((b - Vec2::new(0.25, 0.25)).length() < 1e-6);
+        // Below the edge 0–1, at x = 2: the nearest point is (2, 0), halfway along it.
+        let (d, b) = nearest(&c, Vec2::new(2.0, -1.0)).unwrap();
+        assert!((d - 1.0).abs() < 1e-6 && (b - Vec2::new(0.5, 0.0)).length() < 1e-6, "{d} {b}");
+        assert!(nearest(&[Vec2::ZERO, Vec2::ONE, Vec2::ONE * 2.0], Vec2::ZERO).is_none());
+    }
+}
