@@ -6,10 +6,12 @@
 use anyhow::{Result, bail};
 use glam::Vec3;
 
+use rayon::prelude::*;
+
 use crate::lightmap::Atlas;
-use crate::lightmap::texels::Texels;
+use crate::lightmap::texels::{self, TexelPoint, Texels};
 use crate::lightmap::unwrap::{self, Density, Unwrapped};
-use crate::params::FrameParams;
+use crate::params::{Antialiasing, FrameParams};
 use crate::renderer::{Progress, Renderer};
 use crate::scene::Scene;
 use crate::scene::bvh::Bvh;
@@ -31,18 +33,43 @@ impl Layout {
     }
 }
 
-/// The light at every texel of `layout`, as `renderer` (built for `scene`) senses it with `frame`, the
-/// gutter and the buried texels filled from their neighbours.
+/// The light at every texel of `layout`, as `renderer` (built for `scene`) senses it with `frame`: each
+/// texel's point, then, where a texel's light differs from a neighbour's by more than
+/// [`texels::CONTRAST`], the mean over [`texels::FOOTPRINT`] points of its footprint (with `frame.aa`, as a
+/// render supersamples its pixels where the light changes inside them); the gutter and the
+/// buried texels filled from their neighbours. `bvh` is the scene's.
 pub fn bake(
     renderer: &mut Renderer,
-    scene: &Scene,
+    (scene, bvh): (&Scene, &Bvh),
     layout: &Layout,
     frame: &FrameParams,
     progress: &dyn Progress,
-) -> Result<Atlas> {
-    let g = layout.texels.gbuffer(&scene.mesh);
-    let (r, _) = renderer.sense_points(&g, frame, progress)?;
-    let light: Vec<Vec3> = r.iter().map(|v| v.truncate()).collect();
+) -> Result<Baked> {
+    let mesh = &scene.mesh;
+    // The second pass reads the cache the first solved.
+    renderer.keep_cache();
+    let (r, _) = renderer.sense_points(&layout.texels.gbuffer(mesh), frame, progress)?;
+    let mut light: Vec<Vec3> = r.iter().map(|v| v.truncate()).collect();
+    // With `--aa off`, the points alone.
+    let contrasted = match frame.aa {
+        Antialiasing::On => layout.texels.contrasted(&light),
+        Antialiasing::Off => Vec::new(),
+    };
+    let (bias, _) = crate::sensors::frame::offsets(mesh.scale());
+    let footprints: Vec<Vec<TexelPoint>> =
+        contrasted.par_iter().map(|&i| layout.texels.footprint(i, (mesh, bvh, bias), &layout.unwrapped)).collect();
+    let points: Vec<Option<TexelPoint>> = footprints.iter().flatten().map(|&p| Some(p)).collect();
+    let r = match points.is_empty() {
+        true => Vec::new(),
+        false => renderer.sense_points(&texels::gbuffer(mesh, &points), frame, progress)?.0,
+    };
+    let mut k = 0;
+    for (&i, footprint) in contrasted.iter().zip(&footprints) {
+        if !footprint.is_empty() {
+            light[i] = r[k..k + footprint.len()].iter().map(|v| v.truncate()).sum::<Vec3>() / footprint.len() as f32;
+        }
+        k += footprint.len();
+    }
     if let Some(i) = light.iter().position(|v| !v.is_finite()) {
         bail!("the lightmap's texel {i} is not finite ({}): a bug; please report it", light[i]);
     }
@@ -50,5 +77,13 @@ pub fn bake(
     let u = &layout.unwrapped;
     let mut atlas = Atlas::new((u.width, u.height, u.pages), light, valid);
     atlas.dilate();
-    Ok(atlas)
+    Ok(Baked { atlas, footprints: contrasted.len() as u64, footprint_points: points.len() as u64 })
+}
+
+/// A bake's result.
+pub struct Baked {
+    pub atlas: Atlas,
+    /// Texels taken over their footprint, and the points sensed for them.
+    pub footprints: u64,
+    pub footprint_points: u64,
 }

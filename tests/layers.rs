@@ -21,6 +21,7 @@ const RULES: &[(&str, &[&str])] = &[
     ("sensors", &["scene", "gbuffer", "gpu_types", "light"]),
     ("params", &["sensors"]),
     ("gi", &["scene", "gpu_types", "params"]),
+    ("lightmap", &["scene", "gbuffer", "sensors", "light", "output"]),
     // The oracle: CPU only, never a GPU pass.
     ("supersample", &["scene", "gbuffer", "sensors", "gpu_types", "light"]),
     ("reference", &["scene", "gbuffer", "sensors", "params", "light", "cancel"]),
@@ -54,6 +55,7 @@ const RULES: &[(&str, &[&str])] = &[
     ),
     // Users of the renderer.
     ("bench", &["vk", "scene", "params", "passes", "renderer", "strategy", "sensors"]),
+    ("bake", &["scene", "params", "renderer", "sensors", "lightmap"]),
     ("metrics", &["vk", "scene", "params", "renderer", "strategy", "output"]),
     // The live viewer: a window over the same renderer; its files and device come from its host (the CLI).
     ("viewer", &["vk", "scene", "params", "renderer", "gpu_types", "output", "cancel"]),

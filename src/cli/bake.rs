@@ -10,9 +10,9 @@ use clap::Args;
 use glam::Vec4;
 use sensorlight::bake::{self, Layout};
 use sensorlight::cancel::Cancel;
-use sensorlight::lightmap::unwrap::{Density, Unwrapped};
-use sensorlight::lightmap::{Atlas, glb, view};
-use sensorlight::output::{atomic, exr::ExrImage, png};
+use sensorlight::lightmap::unwrap::{Density, Source, Unwrapped};
+use sensorlight::lightmap::{self, Atlas, glb, view};
+use sensorlight::output::{atomic, exr::ExrImage, hdr, png};
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::strategy::Cache;
 use sensorlight::vk::Device;
@@ -36,6 +36,10 @@ pub struct BakeArgs {
     /// Texels per scene unit instead of --size; the page grows to fit
     #[arg(long, value_name = "D", allow_negative_numbers = true)]
     texels_per_unit: Option<f32>,
+    /// The lightmap's encoding besides the linear float EXR, always written: rgbm, an 8-bit RGBA PNG (light =
+    /// rgb × a × 8, linear) for engines that take 8 bits; hdr, a Radiance RGBE file
+    #[arg(long, value_enum, default_value_t = Format::Exr)]
+    format: Format,
     /// Also write the view an engine shows of the baked scene from the scene's camera (albedo × lightmap,
     /// bilinear, plus emission) to F.exr and its PNG: to compare with `render`'s image
     #[arg(long, value_name = "F.exr")]
@@ -46,13 +50,32 @@ pub struct BakeArgs {
     engine: EngineFlags,
 }
 
+/// The lightmap's encodings: the EXR alone, or with another beside it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Format {
+    Exr,
+    Rgbm,
+    Hdr,
+}
+
+impl Format {
+    /// The other file's extension and how `extras.lightmap.alternate` describes it.
+    fn alternate(self) -> Option<(&'static str, serde_json::Value)> {
+        match self {
+            Format::Exr => None,
+            Format::Rgbm => Some(("png", serde_json::json!({ "encoding": "rgbm", "range": lightmap::RGBM_RANGE }))),
+            Format::Hdr => Some(("hdr", serde_json::json!({ "encoding": "rgbe" }))),
+        }
+    }
+}
+
 /// The lightmap's file names beside `glb` (OUT.glb → OUT.lightmap.exr, or OUT.lightmap.N.exr per page).
-fn lightmap_paths(glb: &Path, pages: u32) -> Vec<PathBuf> {
+fn lightmap_paths(glb: &Path, pages: u32, extension: &str) -> Vec<PathBuf> {
     let stem = glb.with_extension("");
     let stem = stem.display();
     match pages {
-        1 => vec![PathBuf::from(format!("{stem}.lightmap.exr"))],
-        n => (0..n).map(|k| PathBuf::from(format!("{stem}.lightmap.{k}.exr"))).collect(),
+        1 => vec![PathBuf::from(format!("{stem}.lightmap.{extension}"))],
+        n => (0..n).map(|k| PathBuf::from(format!("{stem}.lightmap.{k}.{extension}"))).collect(),
     }
 }
 
@@ -79,19 +102,28 @@ pub fn run(args: BakeArgs) -> Result<ExitCode> {
         let layout = Layout::new(&scene, &bvh, density, device.adapter.limits.max_image_dimension_2d)?;
         let unwrapped = &layout.unwrapped;
         check_memory(device, unwrapped)?;
-        let paths = lightmap_paths(&args.output, unwrapped.pages);
+        let paths = lightmap_paths(&args.output, unwrapped.pages, "exr");
+        let alternate = args.format.alternate().map(|(ext, _)| lightmap_paths(&args.output, unwrapped.pages, ext));
         let mut outputs: Vec<(&str, &Path)> = vec![("-o", &args.output)];
-        outputs.extend(paths.iter().map(|p| ("the lightmap beside -o", p.as_path())));
+        outputs.extend(paths.iter().chain(alternate.iter().flatten()).map(|p| ("the lightmap beside -o", p.as_path())));
         if let Some(v) = &view_outputs {
             outputs.extend(v.paths().map(|p| ("--view", p.as_path())));
         }
         atomic::check_outputs(&outputs, &scene.input_paths())?;
+        let from = match &unwrapped.source {
+            Source::File => "the file's TEXCOORD_1".to_owned(),
+            Source::Unwrapped(why) => {
+                if let Some(why) = why {
+                    super::warn_all(&[format!("{why}: the lightmap's coordinates are made anew (uvunwrap)")]);
+                }
+                format!("{} charts", unwrapped.charts)
+            }
+        };
         say!(
-            "lightmap: {} page(s) of {} × {} texels, {} charts, {:.3} texels per unit ({:.1} s)",
+            "lightmap: {} page(s) of {} × {} texels, {from}, {:.3} texels per unit ({:.1} s)",
             unwrapped.pages,
             unwrapped.width,
             unwrapped.height,
-            unwrapped.charts,
             unwrapped.texels_per_unit,
             started.elapsed().as_secs_f64()
         );
@@ -108,17 +140,22 @@ pub fn run(args: BakeArgs) -> Result<ExitCode> {
         let mut cache = Cache::open_default();
         let mut renderer = super::build_renderer(device, (&scene, &params), &args.engine, &mut cache, &mut |_| ())?;
         let sensing = Instant::now();
-        let atlas = bake::bake(&mut renderer, &scene, &layout, &params.frame(), &progress)?;
+        let baked = bake::bake(&mut renderer, (&scene, &bvh), &layout, &params.frame(), &progress)?;
         progress.complete();
         progress.finish();
         cancel.check()?;
         let (n, seconds) = (texels.count(), sensing.elapsed().as_secs_f64());
         say!(
-            "baked {n} texels in {seconds:.1} s ({:.0} texels/s; {:.1} s in all)",
+            "baked {n} texels in {seconds:.1} s ({:.0} texels/s; {:.1} s in all); {} taken over their footprint \
+             ({} points) where the light changes across them",
             n as f64 / seconds.max(1e-9),
-            started.elapsed().as_secs_f64()
+            started.elapsed().as_secs_f64(),
+            baked.footprints,
+            baked.footprint_points
         );
-        write(&args, (&scene, size), (unwrapped, &atlas, &paths), (&bvh, view_outputs.as_ref(), &params), &cancel)
+        let atlas = baked.atlas;
+        let files = Files { exr: &paths, alternate: alternate.as_deref() };
+        write(&args, (&scene, size), (unwrapped, &atlas, files), (&bvh, view_outputs.as_ref(), &params), &cancel)
     })
 }
 
@@ -139,41 +176,62 @@ fn check_memory(device: &Device, unwrapped: &Unwrapped) -> Result<()> {
     Ok(())
 }
 
+/// The lightmap's files per page: the EXR's, and those of `--format`'s encoding.
+struct Files<'a> {
+    exr: &'a [PathBuf],
+    alternate: Option<&'a [PathBuf]>,
+}
+
+/// The file names of `paths`, as the `.glb` beside them names them.
+fn names(paths: &[PathBuf]) -> Vec<String> {
+    paths.iter().map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect()
+}
+
 /// Writes the `.glb`, its lightmap pages and (with `--view`) the view, all or none.
 fn write(
     args: &BakeArgs,
     (scene, size): (&sensorlight::scene::Scene, sensorlight::scene::ImageSize),
-    (unwrapped, atlas, paths): (&Unwrapped, &Atlas, &[PathBuf]),
+    (unwrapped, atlas, files): (&Unwrapped, &Atlas, Files<'_>),
     (bvh, view_outputs, params): (&Bvh, Option<&super::ImageOutputs>, &sensorlight::params::RenderParams),
     cancel: &Cancel,
 ) -> Result<()> {
-    let mut files = atomic::Outputs::new();
-    let uris: Vec<String> =
-        paths.iter().map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
-    let bytes = glb::encode(&scene.mesh, unwrapped, &glb::LightmapFile { uris: &uris }, (&scene.camera, size))?;
-    files.stage_bytes(&args.output, &bytes)?;
-    for (page, path) in paths.iter().enumerate() {
-        ExrImage::new(atlas.width, atlas.height)
+    let mut staged = atomic::Outputs::new();
+    let (uris, alternate_uris) = (names(files.exr), files.alternate.map(names));
+    let alternate = alternate_uris.as_deref().zip(args.format.alternate().map(|(_, e)| e));
+    let lightmap = glb::LightmapFile { uris: &uris, alternate };
+    let bytes = glb::encode(&scene.mesh, unwrapped, &lightmap, (&scene.camera, size))?;
+    staged.stage_bytes(&args.output, &bytes)?;
+    let (w, h) = (atlas.width, atlas.height);
+    for (page, path) in files.exr.iter().enumerate() {
+        ExrImage::new(w, h)
             .attribute("sensorlight.quantity", "irradiance/pi, linear")
             .rgba("", &atlas.page_rgba(page as u32))
-            .stage(&mut files, path)?;
+            .stage(&mut staged, path)?;
+    }
+    for (page, path) in files.alternate.into_iter().flatten().enumerate() {
+        let texels = atlas.page(page as u32);
+        match args.format {
+            Format::Rgbm => staged.stage(path, |f| png::encode_rgba8(f, w, h, &lightmap::rgbm(texels)))?,
+            Format::Hdr => staged.stage(path, |f| hdr::encode(f, w, h, texels))?,
+            Format::Exr => {}
+        }
     }
     let mut written: Vec<&Path> = vec![&args.output];
-    written.extend(paths.iter().map(PathBuf::as_path));
+    written.extend(files.exr.iter().chain(files.alternate.into_iter().flatten()).map(PathBuf::as_path));
     if let Some(outputs) = view_outputs {
         let background = params.estimator.background;
         let shown = view::view(scene, bvh, (unwrapped, atlas), size, background);
         let image: Vec<Vec4> = shown.iter().map(|s| s.colour).collect();
         if let Some(path) = &outputs.exr {
-            ExrImage::new(size.width, size.height).rgba("", &image).stage(&mut files, path)?;
+            ExrImage::new(size.width, size.height).rgba("", &image).stage(&mut staged, path)?;
         }
         if let Some(path) = &outputs.png {
-            png::stage(&mut files, path, (size.width, size.height), &image, params.values.exposure)?;
+            png::stage(&mut staged, path, (size.width, size.height), &image, params.values.exposure)?;
         }
         written.extend(outputs.paths().map(PathBuf::as_path));
     }
     cancel.check()?;
-    files.commit()?;
+    staged.commit()?;
     for path in written {
         say!("wrote {}", path.display());
     }

@@ -205,7 +205,8 @@ impl Shared {
         if s.round > 0 && s.phase == "sensing" {
             what = match s.measure {
                 Measure::Pixels => format!("round {}: {}/{} sensors", s.round, s.round_done, s.round_queued),
-                Measure::Texels => format!("{}/{} texels", s.round_done, s.round_queued),
+                Measure::Texels if s.round == 1 => format!("{}/{} texels", s.round_done, s.round_queued),
+                Measure::Texels => format!("footprints: {}/{} points", s.round_done, s.round_queued),
             };
         }
         if let (Some(level), BOUNCES) = (s.cache_level, s.phase) {
@@ -321,6 +322,13 @@ impl Progress for RenderProgress {
             if s.phase != BOUNCES {
                 s.round += 1;
                 s.first_grid.get_or_insert(n);
+                // A bake's later passes (texels taken over their footprint) add to what is to do.
+                if s.measure == Measure::Texels && s.round > 1 {
+                    s.pixels += n;
+                    if let Some(bar) = &self.shared.bar {
+                        bar.set_length(s.pixels);
+                    }
+                }
             }
         }
         if let Some(text) = self.shared.estimate() {

@@ -7,6 +7,9 @@
 //!                           "quantity": "irradiance/pi", "encoding": "linear" } }
 //! ```
 //!
+//! With `--format rgbm` or `hdr`, `"alternate": { "uri": …, "encoding": "rgbm", "range": 8 }` (or
+//! `"encoding": "rgbe"`) names the same light as an 8-bit PNG or a Radiance HDR beside it.
+//!
 //! A surface shows `baseColorFactor × baseColorTexture(TEXCOORD_0) × lightmap(TEXCOORD_1)` (bilinear), plus
 //! its emission. glTF has no ratified lightmap extension: `EXT_lightmap`-style drafts and
 //! `MSFT_lod`-era proposals were considered; an engine's importer maps `extras.lightmap` to its own slot
@@ -20,10 +23,13 @@ use serde_json::{Value, json};
 use super::unwrap::Unwrapped;
 use crate::scene::{Camera, ImageSize, Mesh, Texture};
 
-/// What the lightmap file is called beside the `.glb` and which page of it a material reads.
+/// What the lightmap files are called beside the `.glb`.
 pub struct LightmapFile<'a> {
-    /// One file name per page (relative to the `.glb`).
+    /// The linear float EXR: one file name per page (relative to the `.glb`).
     pub uris: &'a [String],
+    /// The same light in another encoding, where asked (`--format`): its files per page and its
+    /// `extras.lightmap.alternate` (`"encoding"` and, for RGBM, `"range"`; the uri is added per page).
+    pub alternate: Option<(&'a [String], Value)>,
 }
 
 /// The glTF binary of `mesh`'s local triangles laid in the lightmap by `unwrapped`, seen by `camera` at
@@ -87,6 +93,11 @@ pub fn encode(
                 "quantity": "irradiance/pi", "encoding": "linear",
             }},
         });
+        if let Some((uris, encoding)) = &lightmap.alternate {
+            let mut alternate = encoding.clone();
+            alternate["uri"] = json!(uris[page as usize]);
+            gltf_material["extras"]["lightmap"]["alternate"] = alternate;
+        }
         if let Some(cutout) = material.cutout.filter(|c| textured && Some(c.map) == material.kd_map) {
             gltf_material["alphaMode"] = json!("MASK");
             gltf_material["alphaCutoff"] = json!(cutout.threshold);

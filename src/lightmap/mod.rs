@@ -91,10 +91,42 @@ impl Atlas {
 
     /// Page `page`'s texels as RGBA (alpha 1 where a texel holds light): for the EXR.
     pub fn page_rgba(&self, page: u32) -> Vec<Vec4> {
-        let n = self.width as usize * self.height as usize;
-        let range = page as usize * n..(page as usize + 1) * n;
+        let range = self.page_range(page);
         self.texels[range.clone()].iter().zip(&self.valid[range]).map(|(t, &v)| t.extend(v as u32 as f32)).collect()
     }
+
+    /// Page `page`'s texels.
+    pub fn page(&self, page: u32) -> &[Vec3] {
+        &self.texels[self.page_range(page)]
+    }
+
+    fn page_range(&self, page: u32) -> std::ops::Range<usize> {
+        let n = self.width as usize * self.height as usize;
+        page as usize * n..(page as usize + 1) * n
+    }
+}
+
+/// RGBM's range: an 8-bit RGBM texel holds light up to this (irradiance / π, the scene's `Ke` unit).
+pub const RGBM_RANGE: f32 = 8.0;
+
+/// Page texels as 8-bit RGBM (`--format rgbm`), linear (no sRGB curve): the light is
+/// `rgb × a × RGBM_RANGE`, each byte over 255; `a` is the smallest multiple of 1/255 that keeps `rgb`
+/// within 1 (light above the range clipped).
+pub fn rgbm(texels: &[Vec3]) -> Vec<u8> {
+    texels
+        .iter()
+        .flat_map(|&t| {
+            let t = t.clamp(Vec3::ZERO, Vec3::splat(RGBM_RANGE)) / RGBM_RANGE;
+            let m = (t.max_element() * 255.0).ceil().max(1.0) / 255.0;
+            let rgb = (t / m * 255.0).round().min(Vec3::splat(255.0));
+            [rgb.x as u8, rgb.y as u8, rgb.z as u8, (m * 255.0).round() as u8]
+        })
+        .collect()
+}
+
+/// The light an RGBM texel holds ([`rgbm`]'s inverse, up to rounding).
+pub fn from_rgbm(p: [u8; 4]) -> Vec3 {
+    Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 255.0 * (p[3] as f32 / 255.0) * RGBM_RANGE
 }
 
 #[cfg(test)]
@@ -113,6 +145,17 @@ mod tests {
         assert!(atlas.valid[..5].iter().all(|&v| v), "{:?}", atlas.valid);
         assert!(!atlas.valid[5], "only {DILATE_RINGS} rings are filled");
         assert!(atlas.texels[..5].iter().all(|&t| t == Vec3::splat(2.0)));
+    }
+
+    #[test]
+    fn rgbm_round_trips_within_its_precision() {
+        for t in [Vec3::ZERO, Vec3::new(0.01, 0.02, 0.005), Vec3::new(1.0, 0.5, 0.25), Vec3::splat(7.9)] {
+            let bytes = rgbm(&[t]);
+            let back = from_rgbm(bytes[..4].try_into().unwrap());
+            // A byte of the mantissa at the texel's own scale: half of 1/255 of its largest channel.
+            assert!((back - t).abs().max_element() <= t.max_element() / 255.0 + 1e-6, "{t} → {back}");
+        }
+        assert_eq!(from_rgbm(rgbm(&[Vec3::splat(100.0)])[..4].try_into().unwrap()), Vec3::splat(RGBM_RANGE));
     }
 
     #[test]

@@ -103,31 +103,100 @@ impl Texels {
     }
 
     /// The texels' points as a G-buffer (one row, texel i at pixel i; no surface where a texel has no
-    /// point), each facing its triangle's front: what `Renderer::sense_points` senses.
+    /// point): what `Renderer::sense_points` senses.
     pub fn gbuffer(&self, mesh: &Mesh) -> GBufferData {
-        let n = self.points.len();
-        let mut g = GBufferData {
-            size: ImageSize { width: n as u32, height: 1 },
-            position: vec![Vec4::ZERO; n],
-            normal: vec![Vec4::ZERO; n],
-            albedo: vec![Vec4::ZERO; n],
-            emission: vec![Vec4::ZERO; n],
-            surface: vec![NO_SURFACE; n],
-        };
-        for (i, p) in self.points.iter().enumerate() {
-            let Some(p) = p else { continue };
-            let t = p.triangle as usize;
-            let position = point_of(mesh, *p);
-            let tri = &mesh.triangles[t];
-            let emits = mesh.material_of(tri.surface).is_emitter();
-            g.position[i] = position.extend(1.0);
-            g.normal[i] = mesh.shading_normal(t, position).extend(1.0);
-            g.albedo[i] = mesh.albedo_at(t, position).extend(1.0);
-            g.emission[i] = if emits { mesh.emission_at(t, position) } else { Vec3::ZERO }.extend(1.0);
-            g.surface[i] = tri.surface;
-        }
-        g
+        gbuffer(mesh, &self.points)
     }
+
+    /// The texels whose light (`light`, per texel) differs from a neighbour's by more than [`CONTRAST`] of
+    /// the brighter: a shadow's boundary, a contact shadow's edge, where one point stands badly for the
+    /// texel's footprint. Neighbours: the 4 around, on the page, holding a point.
+    pub fn contrasted(&self, light: &[Vec3]) -> Vec<usize> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let luminance = |i: usize| crate::light::groups::luminance(light[i]);
+        (0..self.points.len())
+            .filter(|&i| {
+                let (j, base) = (i % (w * h), i - i % (w * h));
+                let (x, y) = (j % w, j / w);
+                let around = [(x > 0, -1i64), (x + 1 < w, 1), (y > 0, -(w as i64)), (y + 1 < h, w as i64)];
+                self.points[i].is_some()
+                    && around.iter().filter(|(inside, _)| *inside).any(|&(_, d)| {
+                        let k = base + (j as i64 + d) as usize;
+                        let (a, b) = (luminance(i), luminance(k));
+                        self.points[k].is_some() && (a - b).abs() > CONTRAST * a.max(b)
+                    })
+            })
+            .collect()
+    }
+
+    /// [`FOOTPRINT`] points spread over texel `i`'s footprint: each on the triangle that covers it among
+    /// those of the texel and its 8 neighbours, else (beyond its chart's border) the nearest point of
+    /// texel i's own triangle; those inside geometry left out.
+    pub fn footprint(&self, i: usize, (mesh, bvh, bias): (&Mesh, &Bvh, f32), unwrapped: &Unwrapped) -> Vec<TexelPoint> {
+        let Some(point) = self.points[i] else { return Vec::new() };
+        let (w, h) = (self.width as i64, self.height as i64);
+        let (j, base) = (i as i64 % (w * h), i as i64 - i as i64 % (w * h));
+        let (x, y) = (j % w, j / w);
+        let size = Vec2::new(w as f32, h as f32);
+        let corners = |t: u32| unwrapped.uv[t as usize].map(|p| p * size);
+        let mut near: Vec<u32> = (-1..=1)
+            .flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+            .filter(|&(nx, ny)| (0..w).contains(&nx) && (0..h).contains(&ny))
+            .filter_map(|(nx, ny)| self.points[(base + ny * w + nx) as usize].map(|p| p.triangle))
+            .collect();
+        near.sort_unstable();
+        near.dedup();
+        let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)]
+            .into_iter()
+            .filter_map(|(dx, dy)| {
+                let q = centre + Vec2::new(dx, dy);
+                let covering = near.iter().find_map(|&t| {
+                    barycentric_2d(&corners(t), q)
+                        .filter(|b| in_triangle(*b))
+                        .map(|bary| TexelPoint { triangle: t, bary })
+                });
+                covering.or_else(|| {
+                    nearest(&corners(point.triangle), q).map(|(_, bary)| TexelPoint { triangle: point.triangle, bary })
+                })
+            })
+            .filter(|p| !inside(mesh, bvh, *p, bias))
+            .collect()
+    }
+}
+
+/// Above this relative difference of light between neighbouring texels a texel is taken over its
+/// footprint ([`Texels::contrasted`]).
+pub const CONTRAST: f32 = 0.1;
+
+/// Points a texel is taken over ([`Texels::footprint`]): 2 × 2, stratified.
+pub const FOOTPRINT: usize = 4;
+
+/// `points` as a G-buffer (one row, point i at pixel i; no surface where there is none), each facing its
+/// triangle's front.
+pub fn gbuffer(mesh: &Mesh, points: &[Option<TexelPoint>]) -> GBufferData {
+    let n = points.len();
+    let mut g = GBufferData {
+        size: ImageSize { width: n as u32, height: 1 },
+        position: vec![Vec4::ZERO; n],
+        normal: vec![Vec4::ZERO; n],
+        albedo: vec![Vec4::ZERO; n],
+        emission: vec![Vec4::ZERO; n],
+        surface: vec![NO_SURFACE; n],
+    };
+    for (i, p) in points.iter().enumerate() {
+        let Some(p) = p else { continue };
+        let t = p.triangle as usize;
+        let position = point_of(mesh, *p);
+        let tri = &mesh.triangles[t];
+        let emits = mesh.material_of(tri.surface).is_emitter();
+        g.position[i] = position.extend(1.0);
+        g.normal[i] = mesh.shading_normal(t, position).extend(1.0);
+        g.albedo[i] = mesh.albedo_at(t, position).extend(1.0);
+        g.emission[i] = if emits { mesh.emission_at(t, position) } else { Vec3::ZERO }.extend(1.0);
+        g.surface[i] = tri.surface;
+    }
+    g
 }
 
 /// The surface point a texel stands for.

@@ -35,6 +35,17 @@ pub struct Unwrapped {
     pub pages: u32,
     pub texels_per_unit: f32,
     pub charts: u32,
+    /// Where the coordinates came from.
+    pub source: Source,
+}
+
+/// Where a lightmap's coordinates came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Source {
+    /// The file's own (glTF `TEXCOORD_1`).
+    File,
+    /// Made by `uvunwrap`; `Some(why)` where the file's were refused.
+    Unwrapped(Option<String>),
 }
 
 /// Where the surface folds by more than this at a hard edge (its sides' shading normals differ), a chart
@@ -74,10 +85,103 @@ fn creases(mesh: &Mesh) -> Vec<[bool; 3]> {
         .collect()
 }
 
-/// Unwraps `mesh`'s local triangles (not the sun's disc) at `density`, into pages of at most `max_side`
-/// texels a side (the device's largest image). Charts never span two materials. A density whose atlas
-/// could not fit is refused before unwrapping, with what it would need.
+/// The lightmap's coordinates of `mesh`'s local triangles (not the sun's disc) at `density`, in pages of at
+/// most `max_side` texels a side (the device's largest image): the file's own where every triangle has
+/// them, inside the page and overlapping nowhere; else made by [`make`] (saying why the file's were not
+/// taken).
 pub fn unwrap(mesh: &Mesh, density: Density, max_side: u32) -> Result<Unwrapped> {
+    let local = mesh.local_triangles().len();
+    if mesh.lightmap_uvs.len() < local {
+        return make(mesh, density, max_side, None);
+    }
+    match from_file(mesh, density, max_side)? {
+        Ok(unwrapped) => Ok(unwrapped),
+        Err(why) => make(mesh, density, max_side, Some(why)),
+    }
+}
+
+/// The file's `TEXCOORD_1` as the lightmap's coordinates, or why they cannot serve: a primitive without
+/// them, coordinates outside [0, 1], or two triangles on one texel centre (a lightmap shared by two
+/// points is wrong at one of them).
+fn from_file(mesh: &Mesh, density: Density, max_side: u32) -> Result<std::result::Result<Unwrapped, String>> {
+    let local = mesh.local_triangles();
+    let uv = &mesh.lightmap_uvs[..local.len()];
+    if let Some(t) = uv.iter().position(|c| c.iter().any(|p| !p.is_finite())) {
+        return Ok(Err(format!("triangle {t} has no TEXCOORD_1 (not every primitive has them)")));
+    }
+    if let Some(t) = uv.iter().position(|c| c.iter().any(|p| p.min_element() < -1e-4 || p.max_element() > 1.0 + 1e-4)) {
+        return Ok(Err(format!("TEXCOORD_1 of triangle {t} leaves [0, 1] ({:?})", uv[t])));
+    }
+    let side = match density {
+        Density::Side(side) => side,
+        // The side at which the texels average `d` per unit of area.
+        Density::PerUnit(d) => {
+            let area: f64 = local.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
+            let uv_area: f64 = uv.iter().map(|c| ((c[1] - c[0]).perp_dot(c[2] - c[0]) / 2.0).abs() as f64).sum();
+            (d as f64 * (area / uv_area.max(1e-12)).sqrt()).ceil() as u32
+        }
+    };
+    ensure!(
+        (1..=max_side).contains(&side),
+        "the lightmap of TEXCOORD_1 at this density would be {side} texels a side, beyond this device's largest \
+         image ({max_side}); give a smaller --texels-per-unit or --size"
+    );
+    if let Some((texel, a, b)) = overlap(uv, side) {
+        return Ok(Err(format!(
+            "TEXCOORD_1 overlaps itself: triangles {a} and {b} both cover texel ({}, {}) of {side} × {side}",
+            texel % side,
+            texel / side
+        )));
+    }
+    let area: f64 = local.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
+    let uv_area: f64 = uv.iter().map(|c| ((c[1] - c[0]).perp_dot(c[2] - c[0]) / 2.0).abs() as f64).sum();
+    Ok(Ok(Unwrapped {
+        uv: uv.to_vec(),
+        page: vec![0; uv.len()],
+        width: side,
+        height: side,
+        pages: 1,
+        texels_per_unit: (side as f64 * (uv_area / area.max(1e-30)).sqrt()) as f32,
+        charts: 0,
+        source: Source::File,
+    }))
+}
+
+/// The first texel centre of a `side`² page that two triangles of `uv` cover (strictly inside both), with
+/// the two.
+pub fn overlap(uv: &[[Vec2; 3]], side: u32) -> Option<(u32, usize, usize)> {
+    let mut owner = vec![u32::MAX; side as usize * side as usize];
+    let scale = Vec2::splat(side as f32);
+    for (t, c) in uv.iter().enumerate() {
+        let c = c.map(|p| p * scale);
+        let area = (c[1] - c[0]).perp_dot(c[2] - c[0]);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+        for y in (lo.y.floor().max(0.0) as u32)..(hi.y.ceil() as u32).min(side) {
+            for x in (lo.x.floor().max(0.0) as u32)..(hi.x.ceil() as u32).min(side) {
+                let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                // Strictly inside, by a margin: a centre on an edge two triangles of a chart share is no overlap.
+                let inside =
+                    (0..3).all(|k| (c[(k + 1) % 3] - c[k]).perp_dot(q - c[k]) * area.signum() > 1e-4 * area.abs());
+                if inside {
+                    let i = (y * side + x) as usize;
+                    if owner[i] != u32::MAX {
+                        return Some((i as u32, owner[i] as usize, t));
+                    }
+                    owner[i] = t as u32;
+                }
+            }
+        }
+    }
+    None
+}
+
+/// Unwraps `mesh`'s local triangles with `uvunwrap` at `density` (see [`unwrap`]); `why`: why the file's
+/// coordinates were not taken. A density whose atlas could not fit is refused before unwrapping, with what
+/// it would need. Charts never span two materials.
+fn make(mesh: &Mesh, density: Density, max_side: u32, why: Option<String>) -> Result<Unwrapped> {
     let triangles = mesh.local_triangles();
     if let Density::PerUnit(d) = density {
         let area: f64 = triangles.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
@@ -127,5 +231,6 @@ pub fn unwrap(mesh: &Mesh, density: Density, max_side: u32) -> Result<Unwrapped>
         pages: atlas.page_count.max(1),
         texels_per_unit: atlas.texels_per_unit,
         charts: atlas.chart_count,
+        source: Source::Unwrapped(why),
     })
 }

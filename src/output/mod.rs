@@ -3,6 +3,7 @@
 
 pub mod atomic;
 pub mod exr;
+pub mod hdr;
 pub mod plot;
 pub mod png;
 pub mod stdout;

@@ -27,6 +27,7 @@ pub fn from_groups(
             triangles,
             normals: Vec::new(),
             uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
         })
         .collect();
     let mut warnings = Vec::new();

@@ -106,6 +106,9 @@ pub struct Group {
     /// Each triangle's corners' texture coordinates, (0, 0) the image's top-left corner (an OBJ `vt` (u, v)
     /// is (u, 1 − v)); empty where some face of the group gives none.
     pub uvs: Vec<[Vec2; 3]>,
+    /// Each triangle's corners' lightmap coordinates (glTF's `TEXCOORD_1`), as `uvs` places them; empty
+    /// where the group has none (`sensorlight bake` then unwraps the mesh itself).
+    pub lightmap_uvs: Vec<[Vec2; 3]>,
 }
 
 /// A file's mesh as a loader read it: its groups, materials, textures, what it warned of, the files read.

@@ -36,6 +36,9 @@ pub struct Mesh {
     /// Each triangle's corners' texture coordinates ((0, 0): the image's top-left corner); empty where no
     /// material has a texture.
     pub uvs: Vec<[Vec2; 3]>,
+    /// Each triangle's corners' lightmap coordinates from the file (glTF's `TEXCOORD_1`; NaN where its
+    /// primitive has none); empty where none has any. `sensorlight bake` lays its lightmap by them.
+    pub lightmap_uvs: Vec<[Vec2; 3]>,
     /// Indexed by `SurfaceId - 1`.
     pub surfaces: Vec<Surface>,
     pub materials: Vec<Material>,
@@ -56,7 +59,7 @@ impl Mesh {
         textures: Vec<Texture>,
         warnings: &mut Vec<String>,
     ) -> Result<Self> {
-        let surfaces::Assigned { triangles, normals: shading, uvs, surfaces, dropped } =
+        let surfaces::Assigned { triangles, normals: shading, uvs, lightmap_uvs, surfaces, dropped } =
             surfaces::assign(groups, &materials);
         if let Some((group, v)) = &dropped.first_not_finite {
             bail!(
@@ -99,8 +102,17 @@ impl Mesh {
             bounds.max
         );
         let textures = std::sync::Arc::new(textures);
-        let mut mesh =
-            Self { triangles, shading, uvs, surfaces, materials, textures, texture_mean: Vec::new(), bounds };
+        let mut mesh = Self {
+            triangles,
+            shading,
+            uvs,
+            lightmap_uvs,
+            surfaces,
+            materials,
+            textures,
+            texture_mean: Vec::new(),
+            bounds,
+        };
         mesh.texture_mean = mesh.texture_means();
         Ok(mesh)
     }

@@ -34,6 +34,8 @@ pub struct Assigned {
     pub normals: Vec<[Vec3; 3]>,
     /// Their corners' texture coordinates (0 in a group without); empty where no group has any.
     pub uvs: Vec<[Vec2; 3]>,
+    /// Their corners' lightmap coordinates (NaN in a group without); empty where no group has any.
+    pub lightmap_uvs: Vec<[Vec2; 3]>,
     pub surfaces: Vec<Surface>,
     /// What was left out.
     pub dropped: Dropped,
@@ -45,6 +47,8 @@ pub fn assign(groups: &[Group], materials: &[Material]) -> Assigned {
     let mut normals = Vec::with_capacity(if smooth { triangles.capacity() } else { 0 });
     let textured = groups.iter().any(|g| !g.uvs.is_empty());
     let mut uvs = Vec::with_capacity(if textured { triangles.capacity() } else { 0 });
+    let lightmapped = groups.iter().any(|g| !g.lightmap_uvs.is_empty());
+    let mut lightmap_uvs = Vec::with_capacity(if lightmapped { triangles.capacity() } else { 0 });
     let mut surfaces = Vec::new();
     let mut dropped = Dropped::default();
     let cos_crease = CREASE_DEG.to_radians().cos();
@@ -60,6 +64,9 @@ pub fn assign(groups: &[Group], materials: &[Material]) -> Assigned {
                     }
                     if textured {
                         uvs.push(group.uvs.get(k).copied().unwrap_or([Vec2::ZERO; 3]));
+                    }
+                    if lightmapped {
+                        lightmap_uvs.push(group.lightmap_uvs.get(k).copied().unwrap_or([Vec2::NAN; 3]));
                     }
                 }
                 Shape::Degenerate => dropped.degenerate += 1,
@@ -119,7 +126,7 @@ pub fn assign(groups: &[Group], materials: &[Material]) -> Assigned {
             };
         }
     }
-    Assigned { triangles, normals, uvs, surfaces, dropped }
+    Assigned { triangles, normals, uvs, lightmap_uvs, surfaces, dropped }
 }
 
 /// A triangle's corners' shading normals from the file's (`given`, if any) and its front normal `face`: each
@@ -248,7 +255,14 @@ mod tests {
         let o = Vec3::ZERO;
         let mut triangles = quad([o, x, x + z, z]); // floor, y = 0
         triangles.extend(quad([o, y, y + x, x])); // wall z = 0, shares edge o–x at 90°
-        let groups = [Group { name: "box".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let groups = [Group {
+            name: "box".into(),
+            material: 0,
+            triangles,
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
+        }];
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);
         assert_eq!(dropped, Dropped::default());
@@ -268,8 +282,14 @@ mod tests {
         // Through `assign`: only where some group gives normals, and one per kept triangle.
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
-        let flat =
-            [Group { name: "f".into(), material: 0, triangles: vec![[a, b, c]], normals: Vec::new(), uvs: Vec::new() }];
+        let flat = [Group {
+            name: "f".into(),
+            material: 0,
+            triangles: vec![[a, b, c]],
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
+        }];
         assert!(assign(&flat, &materials).normals.is_empty());
         let smooth = [
             Group {
@@ -278,6 +298,7 @@ mod tests {
                 triangles: vec![[a, b, b], [a, b, c]],
                 normals: vec![[c; 3], given],
                 uvs: Vec::new(),
+                lightmap_uvs: Vec::new(),
             },
             flat[0].clone(),
         ];
@@ -298,7 +319,14 @@ mod tests {
         // A fin: two coplanar triangles and a third at 90°, all on the edge o–x.
         let (o, x) = (Vec3::ZERO, Vec3::X);
         let triangles = vec![[o, x, Vec3::Z], [x, o, -Vec3::Z], [o, x, Vec3::Y]];
-        let groups = [Group { name: "fin".into(), material: 0, triangles, normals: Vec::new(), uvs: Vec::new() }];
+        let groups = [Group {
+            name: "fin".into(),
+            material: 0,
+            triangles,
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
+        }];
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, .. } = assign(&groups, &materials);
         assert_eq!(surfaces.len(), 2);
@@ -313,6 +341,7 @@ mod tests {
             triangles: vec![[Vec3::ZERO, Vec3::X, Vec3::X * 2.0], [Vec3::ZERO, Vec3::X, Vec3::Y]],
             normals: Vec::new(),
             uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
         }];
         let materials = [Material::new("m", Vec3::ONE, Vec3::ZERO)];
         let Assigned { triangles: tris, surfaces, dropped, .. } = assign(&groups, &materials);

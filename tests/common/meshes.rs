@@ -53,9 +53,24 @@ pub fn scene() -> Mesh {
             triangles: sphere(Vec3::ZERO, 1.0, 64),
             normals: Vec::new(),
             uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
         },
-        Group { name: "floor".into(), material: 0, triangles: plane(-1.5, 48), normals: Vec::new(), uvs: Vec::new() },
-        Group { name: "lamp".into(), material: 1, triangles: lamp, normals: Vec::new(), uvs: Vec::new() },
+        Group {
+            name: "floor".into(),
+            material: 0,
+            triangles: plane(-1.5, 48),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
+        },
+        Group {
+            name: "lamp".into(),
+            material: 1,
+            triangles: lamp,
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            lightmap_uvs: Vec::new(),
+        },
     ];
     Mesh::new(&groups, materials, Vec::new(), &mut Vec::new()).unwrap()
 }

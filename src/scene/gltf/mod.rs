@@ -326,6 +326,12 @@ impl Reader<'_> {
             if uvs.as_ref().is_some_and(|t| t.len() != positions.len()) {
                 bail!("{}: TEXCOORD_0 and POSITION have different counts", where_());
             }
+            // The lightmap's own coordinates, where the file has them (`sensorlight bake`).
+            let lightmap_uvs: Option<Vec<Vec2>> =
+                reader.read_tex_coords(1).map(|t| t.into_f32().map(Vec2::from).collect());
+            if lightmap_uvs.as_ref().is_some_and(|t| t.len() != positions.len()) {
+                bail!("{}: TEXCOORD_1 and POSITION have different counts", where_());
+            }
             let material_index = match uvs {
                 Some(_) => material_index,
                 None => self.material_without_coordinates(material_index, &name),
@@ -341,6 +347,10 @@ impl Reader<'_> {
                     None => Vec::new(),
                 },
                 uvs: match &uvs {
+                    Some(t) => corners.iter().map(|&c| order(c).map(|i| t[i as usize])).collect(),
+                    None => Vec::new(),
+                },
+                lightmap_uvs: match &lightmap_uvs {
                     Some(t) => corners.iter().map(|&c| order(c).map(|i| t[i as usize])).collect(),
                     None => Vec::new(),
                 },
@@ -387,6 +397,7 @@ impl Reader<'_> {
                 triangles,
                 normals,
                 uvs: Vec::new(),
+                lightmap_uvs: Vec::new(),
             });
         }
     }

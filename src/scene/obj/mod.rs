@@ -199,7 +199,7 @@ pub fn load(path: &Path) -> Result<Imported, LoadError> {
             materials.push(materials[material].untextured());
             material = materials.len() - 1;
         }
-        groups.push(Group { name: model.name, material, triangles, normals, uvs });
+        groups.push(Group { name: model.name, material, triangles, normals, uvs, lightmap_uvs: Vec::new() });
     }
     let mut files = files.into_inner();
     let mut images: Vec<PathBuf> =
