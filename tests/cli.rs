@@ -325,7 +325,7 @@ fn every_flag_in_help_is_in_the_usage_guide() {
         }
     }
     for command in
-        ["devices", "render", "cache", "assemble", "slurm", "reference", "compare", "bench", "metrics", "view"]
+        ["devices", "render", "cache", "bake", "assemble", "slurm", "reference", "compare", "bench", "metrics", "view"]
     {
         let text = section(command);
         for flag in long_flags(&[command, "--help"]) {
