@@ -21,12 +21,14 @@ use super::args::{EngineFlags, LookFlags};
 use super::progress::RenderProgress;
 
 #[derive(Args)]
-#[command(after_help = "Every texel's point is sensed as a pixel of `render` would be, after the radiance cache; --aa on \
+#[command(
+    after_help = "Every texel's point is sensed as a pixel of `render` would be, after the radiance cache; --aa on \
     (the default) takes a texel over 2 × 2 points of its footprint where its light differs from a neighbour's by \
     more than 10 %. --tile, --dradiance and the filters shape a render's image and do nothing here; --width and \
     --height size the camera the .glb holds and --view's image. A surface shows baseColorFactor × baseColorTexture \
     × the lightmap at TEXCOORD_1 (bilinear), plus its emission: three.js, `material.lightMap` with \
-    `lightMap.channel = 1` and `lightMapIntensity = Math.PI` (scripts/threejs/view.js); see the README.")]
+    `lightMap.channel = 1` and `lightMapIntensity = Math.PI` (scripts/threejs/view.js); see the README."
+)]
 pub struct BakeArgs {
     /// Scene file (TOML), or an OBJ or glTF mesh (framed and lit as `render` frames and lights it)
     scene: PathBuf,

@@ -226,6 +226,10 @@ impl Shared {
         }
         if let Some(rate) = rate {
             what += &format!(", {rate:.0} sensors/s");
+            // A bake's pass: its points are known, so is the time left at the pass's own rate.
+            if s.measure == Measure::Texels && s.phase == "sensing" && s.round_done < s.round_queued {
+                what += &format!(", about {} left", duration((s.round_queued - s.round_done) as f64 / rate));
+            }
         }
         if let Some(bar) = &self.bar {
             bar.set_position(s.resolved);
@@ -268,14 +272,8 @@ impl Shared {
         s.estimated = true;
         let seconds = |ratio: f64| first as f64 * ratio * per_sensor;
         if s.measure == Measure::Texels {
-            // One sensor a texel: the total is known.
-            return (seconds(1.0) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
-                format!(
-                    "estimate: {} ({first} texels at {:.2} ms a texel, {source})",
-                    duration(seconds(1.0)),
-                    per_sensor * 1e3
-                )
-            });
+            // A bake's texels are known up front: the bar says how long is left as it goes.
+            return None;
         }
         let (low, high) = SENSORS_OVER_FIRST_GRID;
         (seconds(SENSORS_TYPICAL) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
