@@ -149,6 +149,7 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
         shading: Vec::new(),
         surfaces: vec![sensorlight::scene::Surface { name: "wall".into(), material: 0 }],
         uvs: Vec::new(),
+        lightmap_uvs: Vec::new(),
         materials: vec![sensorlight::scene::Material::new("grey", Vec3::splat(0.5), Vec3::ZERO)],
         textures: Default::default(),
         texture_mean: vec![Vec3::ONE],
