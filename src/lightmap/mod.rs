@@ -135,16 +135,16 @@ mod tests {
 
     #[test]
     fn dilation_fills_the_gutter_from_the_chart() {
-        // A 6 × 1 page: light at texel 1 only; after dilation texels 0 and 2.. carry it, as far as the rings go.
-        let mut texels = vec![Vec3::ZERO; 6];
+        // A 7 × 1 page lit at texel 1 only: dilation carries its light DILATE_RINGS = 4 texels out, to texel 5.
+        let mut texels = vec![Vec3::ZERO; 7];
         texels[1] = Vec3::splat(2.0);
-        let mut valid = vec![false; 6];
+        let mut valid = vec![false; 7];
         valid[1] = true;
-        let mut atlas = Atlas::new((6, 1, 1), texels, valid);
+        let mut atlas = Atlas::new((7, 1, 1), texels, valid);
         atlas.dilate();
-        assert!(atlas.valid[..5].iter().all(|&v| v), "{:?}", atlas.valid);
-        assert!(!atlas.valid[5], "only {DILATE_RINGS} rings are filled");
-        assert!(atlas.texels[..5].iter().all(|&t| t == Vec3::splat(2.0)));
+        assert!(atlas.valid[..6].iter().all(|&v| v), "{:?}", atlas.valid);
+        assert!(!atlas.valid[6], "only {DILATE_RINGS} rings are filled");
+        assert!(atlas.texels[..6].iter().all(|&t| t == Vec3::splat(2.0)));
     }
 
     #[test]
