@@ -444,3 +444,87 @@ fn the_three_js_harness_reads_lightmaps_the_right_way_up() {
     assert!(out.status.success(), "{stdout}{stderr}");
     assert!(stdout.contains("passed: every checked pixel within 2/255"), "{stdout}");
 }
+
+/// A smooth sphere (its shading normals shared at every corner) over a floor, lit from above: uvunwrap
+/// cuts it into charts, and where two charts meet the lightmap read from either side of the seam (at a
+/// quarter, half and three quarters of each seam edge) differs by no more than neighbouring texels inside
+/// a chart do, one texel apart on the sphere: no visible seam.
+#[test]
+fn no_jump_across_chart_borders() {
+    use sensorlight::scene::interpolate;
+    let (centre, radius) = (Vec3::new(0.0, 1.0, 0.0), 0.8);
+    let mut lamp = common::meshes::plane(3.0, 2);
+    lamp.iter_mut().for_each(|t| t.swap(1, 2));
+    let groups = vec![
+        ("ball", 0, common::meshes::sphere(centre, radius, 16)),
+        ("floor", 0, common::meshes::plane(0.0, 4)),
+        ("lamp", 1, lamp),
+    ];
+    let camera = sensorlight::scene::Camera::look_at(Vec3::new(0.0, 1.5, 4.0), centre, Vec3::Y, 50.0).unwrap();
+    let materials = vec![common::material("grey", 0.6, 0.0), common::material("lamp", 0.0, 5.0)];
+    let mut scene = common::scene(groups, materials, camera, (32, 32));
+    let on_ball = |p: Vec3| ((p - centre).length() - radius).abs() < 1e-3;
+    scene.mesh.shading = (scene.mesh.triangles.iter())
+        .map(|t| t.v.map(|p| if on_ball(p) { (p - centre).normalize() } else { t.normal }))
+        .collect();
+    let bvh = Bvh::build(&scene.mesh.triangles);
+    let layout = Layout::new(&scene, &bvh, Density::Side(128), 16384).unwrap();
+    let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(Bounces::Converged), Vec3::ZERO);
+    let atlas = common::gpu(|device| {
+        let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
+            .radiance_cache(Some(CacheConfig::new(8, 16)))
+            .build_unchecked(StrategyKind::default())
+            .unwrap();
+        bake::bake(&mut renderer, (&scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
+    });
+    let (u, mesh) = (&layout.unwrapped, &scene.mesh);
+    let light =
+        |t: usize, p: Vec3| luminance(atlas.bilinear(u.page[t], interpolate(&mesh.triangles[t].v, &u.uv[t], p)));
+    let ball: Vec<usize> = (0..u.uv.len()).filter(|&t| mesh.triangles[t].v.iter().all(|&p| on_ball(p))).collect();
+    // Seams: edges two ball triangles share whose lightmap coordinates differ at a shared corner.
+    let key = |p: Vec3| p.to_array().map(f32::to_bits);
+    let mut edges = std::collections::HashMap::new();
+    for &t in &ball {
+        for k in 0..3 {
+            edges.insert((key(mesh.triangles[t].v[k]), key(mesh.triangles[t].v[(k + 1) % 3])), (t, k));
+        }
+    }
+    let mut seam = Vec::new();
+    for &t in &ball {
+        let v = mesh.triangles[t].v;
+        for k in 0..3 {
+            let Some(&(o, j)) = edges.get(&(key(v[(k + 1) % 3]), key(v[k]))) else { continue };
+            let split = u.uv[t][k] != u.uv[o][(j + 1) % 3] || u.uv[t][(k + 1) % 3] != u.uv[o][j];
+            if !split {
+                continue;
+            }
+            for s in [0.25f32, 0.5, 0.75] {
+                let p = v[k].lerp(v[(k + 1) % 3], s);
+                let (a, b) = (light(t, p), light(o, p));
+                seam.push(((a - b) / a.max(b).max(1e-6)).abs());
+            }
+        }
+    }
+    // The scale: the light's change over one texel inside a chart, at each ball triangle's centre.
+    let texel = 1.0 / u.texels_per_unit;
+    let step: Vec<f32> = ball
+        .iter()
+        .map(|&t| {
+            let tri = &mesh.triangles[t];
+            let c = (tri.v[0] + tri.v[1] + tri.v[2]) / 3.0;
+            let along = (tri.v[1] - tri.v[0]).normalize() * texel;
+            let (a, b) = (light(t, c - along * 0.5), light(t, c + along * 0.5));
+            ((a - b) / a.max(b).max(1e-6)).abs()
+        })
+        .collect();
+    let rms = |x: &[f32]| (x.iter().map(|v| v * v).sum::<f32>() / x.len().max(1) as f32).sqrt();
+    eprintln!(
+        "{} seam samples: RMS jump {:.4}, largest {:.4}; one texel's change inside charts: RMS {:.4}",
+        seam.len(),
+        rms(&seam),
+        seam.iter().fold(0f32, |m, &v| m.max(v)),
+        rms(&step)
+    );
+    assert!(seam.len() >= 30, "{} seam samples: the ball should be cut into several charts", seam.len());
+    assert!(rms(&seam) <= rms(&step).max(0.01), "seams jump by {:.4}, a texel's step is {:.4}", rms(&seam), rms(&step));
+}
