@@ -38,7 +38,7 @@ pub struct BakeArgs {
     #[arg(short, long, value_name = "OUT.glb")]
     output: PathBuf,
     /// The atlas's side in texels: the highest density at which every chart fits one page
-    #[arg(long, value_name = "S", default_value_t = 256, conflicts_with = "texels_per_unit",
+    #[arg(long, value_name = "S", default_value_t = 512, conflicts_with = "texels_per_unit",
           value_parser = clap::value_parser!(u32).range(16..=16384))]
     size: u32,
     /// Texels per scene unit instead of --size; the page grows to fit
