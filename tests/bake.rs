@@ -528,3 +528,37 @@ fn no_jump_across_chart_borders() {
     assert!(seam.len() >= 30, "{} seam samples: the ball should be cut into several charts", seam.len());
     assert!(rms(&seam) <= rms(&step).max(0.01), "seams jump by {:.4}, a texel's step is {:.4}", rms(&seam), rms(&step));
 }
+
+/// A glTF quad with a base colour texture under the white sky: the `.glb` carries the texture (embedded as
+/// a PNG, read back by the gltf crate) and `TEXCOORD_0` beside `TEXCOORD_1`, and the engine's view
+/// (texture × lightmap) agrees with `render`'s image within 2 % per pixel.
+#[test]
+fn a_textured_gltf_keeps_its_texture() {
+    let dir = common::scratch("bake-textured");
+    let (a, b) = ([200u8, 60, 40], [40u8, 160, 200]);
+    let texels: Vec<u8> = (0..16).flat_map(|i| if (i % 4 + i / 4) % 2 == 0 { a } else { b }).collect();
+    let mut encoder = png::Encoder::new(std::fs::File::create(dir.join("checker.png")).unwrap(), 4, 4);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.write_header().unwrap().write_image_data(&texels).unwrap();
+    let corners: [[f32; 3]; 4] = [[-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [-1.0, 0.0, -1.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let material = serde_json::json!({
+        "name": "checker",
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 }
+    });
+    let gltf = common::gltf::textured_quad(&dir, "floor", (corners, uvs, true), material, "checker.png");
+    let (glb, view, image) = (dir.join("floor.glb"), dir.join("view.exr"), dir.join("render.exr"));
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let size = ["--width", "64", "--height", "48"];
+    run(&[&["bake", &s(&gltf), "-o", &s(&glb), "--size", "128", "--view", &s(&view)][..], &size].concat());
+    run(&[&["render", &s(&gltf), "-o", &s(&image), "--aovs"][..], &size].concat());
+    let (document, buffers, images) = gltf::import(&glb).expect("the .glb imports, its texture decoded");
+    assert_eq!(images.len(), 1);
+    assert_eq!((images[0].width, images[0].height), (4, 4));
+    let primitive = document.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+    assert!(reader.read_tex_coords(0).is_some() && reader.read_tex_coords(1).is_some());
+    let c = compare_files(&view, &image, "").unwrap();
+    eprintln!("textured quad: {:.4} per pixel against render", c.interior.relative_rmse);
+    assert!(c.interior.relative_rmse <= 0.02, "{:?}", c.interior);
+}
