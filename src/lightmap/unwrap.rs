@@ -52,9 +52,11 @@ pub enum Source {
 /// ends. The renderer shows such an edge as a jump in the light (a box's edge; each facet of a flat-shaded
 /// pillar takes its own normal's light), and a chart unfolded across it would blend the two sides in every
 /// bilinear fetch along it: a Cornell box's short block at a 256² atlas had pixels along its front's edge
-/// 150 % too bright, the room's 16-sided pillar stripes of ±20 %. Edges whose shading normals are shared
-/// (a smooth mesh) stay inside charts: their light is continuous.
-pub const CREASE_DEGREES: f32 = 1.0;
+/// 150 % too bright, the room's 16-sided pillar (22.5° a facet) stripes of ±20 %. Finer facets stay in
+/// one chart: cut at every facet (1°), the 40 000-triangle hall's fluted columns made 10 505 charts on 3
+/// pages, at 20° 1 382 on one, and the room is 0.97 % off `render` either way. Edges whose shading normals
+/// are shared (a smooth mesh) stay inside charts: their light is continuous.
+pub const CREASE_DEGREES: f32 = 20.0;
 
 /// Each local triangle's edges (corner k to k + 1) that are chart boundaries: folds by more than
 /// [`CREASE_DEGREES`] whose two sides do not share their shading normals (an edge no other triangle
