@@ -562,3 +562,49 @@ fn a_textured_gltf_keeps_its_texture() {
     eprintln!("textured quad: {:.4} per pixel against render", c.interior.relative_rmse);
     assert!(c.interior.relative_rmse <= 0.02, "{:?}", c.interior);
 }
+
+/// A wall modelled facing out of the room it closes (its front into the shell, its back to the light, as
+/// the renderer shows it from either side): its texels hold its back side's light, the same as the wall
+/// modelled facing in, within 3 %; not black.
+#[test]
+fn a_wall_facing_out_of_its_room_is_baked_on_its_open_side() {
+    let bake_right_wall = |flip: bool| {
+        let mut scene = common::two_rooms(0.0, (16, 16));
+        let right = |s: u32| scene.mesh.surfaces[s as usize - 1].name.starts_with("right");
+        let wall: Vec<usize> =
+            (0..scene.mesh.triangles.len()).filter(|&t| right(scene.mesh.triangles[t].surface)).collect();
+        if flip {
+            for &t in &wall {
+                let tri = &mut scene.mesh.triangles[t];
+                tri.v.swap(1, 2);
+                tri.normal = -tri.normal;
+            }
+        }
+        let bvh = Bvh::build(&scene.mesh.triangles);
+        let layout = Layout::new(&scene, &bvh, Density::Side(64), 16384).unwrap();
+        let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(Bounces::Fixed(1)), Vec3::ZERO);
+        let atlas = common::gpu(|device| {
+            let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
+                .radiance_cache(Some(CacheConfig::new(8, 16)))
+                .build_unchecked(StrategyKind::default())
+                .unwrap();
+            bake::bake(&mut renderer, (&scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
+        });
+        let on_wall = (layout.texels.points.iter().enumerate())
+            .filter_map(|(i, p)| p.filter(|p| wall.contains(&(p.triangle as usize))).map(|p| (i, p.back)));
+        let (texels, backs): (Vec<usize>, Vec<bool>) = on_wall.unzip();
+        let mean = texels.iter().map(|&i| luminance(atlas.texels[i])).sum::<f32>() / texels.len() as f32;
+        (mean, texels.len(), backs.iter().filter(|&&b| b).count())
+    };
+    let (facing_in, n, backs_in) = bake_right_wall(false);
+    let (facing_out, m, backs_out) = bake_right_wall(true);
+    eprintln!(
+        "the wall facing in: {facing_in} over {n} texels ({backs_in} backs); facing out: {facing_out} ({backs_out} of {m})"
+    );
+    assert_eq!(backs_in, 0);
+    assert!(backs_out * 10 >= m * 9, "{backs_out} of {m} texels on the back");
+    assert!(
+        facing_in > 0.0 && ((facing_out - facing_in) / facing_in).abs() <= 0.03,
+        "{facing_out} against {facing_in}"
+    );
+}

@@ -136,6 +136,13 @@ pub fn run(args: BakeArgs) -> Result<ExitCode> {
             started.elapsed().as_secs_f64()
         );
         let texels = &layout.texels;
+        if texels.backs > 0 {
+            say!(
+                "lightmap: {} texel(s) hold their surface's back side's light: its front faces into geometry \
+                 (the .glb's materials are double-sided)",
+                texels.backs
+            );
+        }
         if texels.moved + texels.buried > 0 {
             say!(
                 "lightmap: {} texel(s) inside geometry moved to the open part of their footprint; {} wholly \

@@ -85,8 +85,10 @@ pub fn encode(
             pbr["baseColorTexture"] =
                 json!({ "index": textures.index(k, &mesh.textures[k], &mut bin)?, "texCoord": 0 });
         }
+        // The renderer shows a surface from either side, and a wall may face out of the room it closes.
         let mut gltf_material = json!({
             "name": name,
+            "doubleSided": true,
             "pbrMetallicRoughness": pbr,
             "extras": { "lightmap": {
                 "uri": lightmap.uris[page as usize], "page": page, "texCoord": 1,

@@ -24,6 +24,9 @@ pub struct TexelPoint {
     pub triangle: u32,
     /// Barycentric weights of corners 1 and 2.
     pub bary: Vec2,
+    /// The light of the triangle's back side: its front faces into geometry (a wall modelled facing out
+    /// of the room it closes, which the renderer shows from either side).
+    pub back: bool,
 }
 
 /// Every page's texels, page after page, row by row from the top.
@@ -37,6 +40,8 @@ pub struct Texels {
     /// to their neighbours (no point of their footprint outside).
     pub moved: u64,
     pub buried: u64,
+    /// Texels whose triangle's front faces into geometry and whose back is open: the back's light.
+    pub backs: u64,
 }
 
 /// The texel's point candidate: its distance from the texel's centre (texels; 0 inside), the triangle and
@@ -75,16 +80,21 @@ impl Texels {
             .enumerate()
             .map(|(i, candidate)| {
                 let Some((_, triangle, bary)) = *candidate else { return (None, 0) };
-                let point = TexelPoint { triangle, bary };
-                if !inside(mesh, bvh, point, bias) {
-                    return (Some(point), 0);
+                let point = TexelPoint { triangle, bary, back: false };
+                let back = TexelPoint { back: true, ..point };
+                match (look(mesh, bvh, point, bias), look(mesh, bvh, back, bias)) {
+                    (Look::Scene, _) => return (Some(point), 0),
+                    // Its front faces into geometry or out of the scene, its back into the scene.
+                    (_, Look::Scene) => return (Some(back), 3),
+                    (Look::Nothing, _) => return (Some(point), 0),
+                    (Look::Inside, _) => {}
                 }
                 let j = i % page_texels;
                 let centre = Vec2::new((j % w as usize) as f32 + 0.5, (j / w as usize) as f32 + 0.5) * texel;
                 let uv = &unwrapped.uv[triangle as usize];
                 let moved = footprint(centre, texel)
                     .filter_map(|p| barycentric_2d(uv, p).filter(|b| in_triangle(*b)))
-                    .map(|bary| TexelPoint { triangle, bary })
+                    .map(|bary| TexelPoint { triangle, bary, back: false })
                     .find(|p| !inside(mesh, bvh, *p, bias));
                 match moved {
                     Some(p) => (Some(p), 1),
@@ -94,7 +104,9 @@ impl Texels {
             .collect();
         let moved = moves.iter().filter(|(_, m)| *m == 1).count() as u64;
         let buried = moves.iter().filter(|(_, m)| *m == 2).count() as u64;
-        Texels { width: w, height: h, pages, points: moves.into_iter().map(|(p, _)| p).collect(), moved, buried }
+        let backs = moves.iter().filter(|(_, m)| *m == 3).count() as u64;
+        let points = moves.into_iter().map(|(p, _)| p).collect();
+        Texels { width: w, height: h, pages, points, moved, buried, backs }
     }
 
     /// The texels with a point.
@@ -152,13 +164,13 @@ impl Texels {
             .filter_map(|(dx, dy)| {
                 let q = centre + Vec2::new(dx, dy);
                 let covering = near.iter().find_map(|&t| {
-                    barycentric_2d(&corners(t), q)
-                        .filter(|b| in_triangle(*b))
-                        .map(|bary| TexelPoint { triangle: t, bary })
+                    barycentric_2d(&corners(t), q).filter(|b| in_triangle(*b)).map(|bary| TexelPoint {
+                        triangle: t,
+                        bary,
+                        back: point.back,
+                    })
                 });
-                covering.or_else(|| {
-                    nearest(&corners(point.triangle), q).map(|(_, bary)| TexelPoint { triangle: point.triangle, bary })
-                })
+                covering.or_else(|| nearest(&corners(point.triangle), q).map(|(_, bary)| TexelPoint { bary, ..point }))
             })
             .filter(|p| !inside(mesh, bvh, *p, bias))
             .collect()
@@ -189,9 +201,10 @@ pub fn gbuffer(mesh: &Mesh, points: &[Option<TexelPoint>]) -> GBufferData {
         let t = p.triangle as usize;
         let position = point_of(mesh, *p);
         let tri = &mesh.triangles[t];
-        let emits = mesh.material_of(tri.surface).is_emitter();
+        let emits = mesh.material_of(tri.surface).is_emitter() && !p.back;
+        let side = if p.back { -1.0 } else { 1.0 };
         g.position[i] = position.extend(1.0);
-        g.normal[i] = mesh.shading_normal(t, position).extend(1.0);
+        g.normal[i] = (side * mesh.shading_normal(t, position)).extend(if p.back { 0.0 } else { 1.0 });
         g.albedo[i] = mesh.albedo_at(t, position).extend(1.0);
         g.emission[i] = if emits { mesh.emission_at(t, position) } else { Vec3::ZERO }.extend(1.0);
         g.surface[i] = tri.surface;
@@ -208,15 +221,39 @@ pub fn point_of(mesh: &Mesh, p: TexelPoint) -> Vec3 {
 /// eight around the horizon, 15° up, where the walls of whatever covers the point are met; and straight up.
 const INSIDE_RAYS: usize = 9;
 
-/// Whether the point `p` lies inside geometry: most of its test rays meet a back face first (the inside of
-/// a box resting on it, of a wall standing across it). A point in the open sees fronts, or nothing.
+/// What a side of a surface point looks at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Look {
+    /// Most test rays meet a back face first: the inside of a box resting on it, of a wall across it.
+    Inside,
+    /// Not inside, and some ray meets the scene.
+    Scene,
+    /// Every ray leaves the scene (a floor under the open sky, or a wall's side facing out of the world).
+    Nothing,
+}
+
+/// What the side `p` of a surface point looks at ([`Look`]), by [`INSIDE_RAYS`] test rays.
+fn look(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> Look {
+    match hits(mesh, bvh, p, bias) {
+        (backs, _) if 2 * backs > INSIDE_RAYS => Look::Inside,
+        (0, 0) => Look::Nothing,
+        _ => Look::Scene,
+    }
+}
+
+/// Whether the point `p` lies inside geometry ([`Look::Inside`]).
 fn inside(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> bool {
+    look(mesh, bvh, p, bias) == Look::Inside
+}
+
+/// How many of `p`'s test rays meet a back face first, and how many a front.
+fn hits(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> (usize, usize) {
     let t = &mesh.triangles[p.triangle as usize];
-    let n = t.normal;
+    let n = if p.back { -t.normal } else { t.normal };
     let origin = point_of(mesh, p) + n * bias;
     let (x, y) = n.any_orthonormal_pair();
     let (s, c) = 15f32.to_radians().sin_cos();
-    let mut backs = 0;
+    let (mut backs, mut fronts) = (0, 0);
     for k in 0..INSIDE_RAYS {
         let dir = if k + 1 == INSIDE_RAYS {
             n
@@ -225,10 +262,13 @@ fn inside(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> bool {
             (x * a.cos() + y * a.sin()) * c + n * s
         };
         if let Some(hit) = bvh.intersect(&Ray::new(origin, dir), 0.0, f32::INFINITY) {
-            backs += (dir.dot(mesh.triangles[hit.triangle as usize].normal) > 0.0) as usize;
+            match dir.dot(mesh.triangles[hit.triangle as usize].normal) > 0.0 {
+                true => backs += 1,
+                false => fronts += 1,
+            }
         }
     }
-    2 * backs > INSIDE_RAYS
+    (backs, fronts)
 }
 
 /// A 4 × 4 grid of points over the texel of `centre` and size `texel` (atlas coordinates), nearest the
