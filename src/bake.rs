@@ -55,9 +55,8 @@ pub fn bake(
         Antialiasing::On => layout.texels.contrasted(&light),
         Antialiasing::Off => Vec::new(),
     };
-    let (bias, _) = crate::sensors::frame::offsets(mesh.scale());
     let footprints: Vec<Vec<TexelPoint>> =
-        contrasted.par_iter().map(|&i| layout.texels.footprint(i, (mesh, bvh, bias), &layout.unwrapped)).collect();
+        contrasted.par_iter().map(|&i| layout.texels.footprint(i, (mesh, bvh), &layout.unwrapped)).collect();
     let points: Vec<Option<TexelPoint>> = footprints.iter().flatten().map(|&p| Some(p)).collect();
     let r = match points.is_empty() {
         true => Vec::new(),

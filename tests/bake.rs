@@ -23,6 +23,22 @@ use sensorlight::scene::bvh::Bvh;
 use sensorlight::sensors::SensorKind;
 use sensorlight::strategy::StrategyKind;
 
+/// `scene` baked on a `side`² atlas with small sensors (rd 16) and cache (8 cells), `bounces` of
+/// global illumination, every texel its point's light (`--aa off`): its BVH, layout and atlas.
+fn bake_small(scene: &Scene, side: u32, bounces: Bounces) -> (Bvh, Layout, sensorlight::lightmap::Atlas) {
+    let bvh = Bvh::build(&scene.mesh.triangles);
+    let layout = Layout::new(scene, &bvh, Density::Side(side), 16384).unwrap();
+    let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(bounces), Vec3::ZERO);
+    let atlas = common::gpu(|device| {
+        let mut renderer = Renderer::builder(device, scene, SensorKind::Hemicube, 16)
+            .radiance_cache(Some(CacheConfig::new(8, 16)))
+            .build_unchecked(StrategyKind::default())
+            .unwrap();
+        bake::bake(&mut renderer, (scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
+    });
+    (bvh, layout, atlas)
+}
+
 fn run(args: &[&str]) {
     let out = common::sensorlight(args);
     assert!(out.status.success(), "{args:?}: {}", common::stderr(&out));
@@ -163,16 +179,7 @@ fn texels_hold_the_oracle_s_light() {
 fn light_does_not_leak_under_a_wall() {
     for thickness in [0.0f32, 0.02] {
         let scene = common::two_rooms(thickness, (48, 48));
-        let bvh = Bvh::build(&scene.mesh.triangles);
-        let layout = Layout::new(&scene, &bvh, Density::Side(128), 16384).unwrap();
-        let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(Bounces::Converged), Vec3::ZERO);
-        let atlas = common::gpu(|device| {
-            let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
-                .radiance_cache(Some(CacheConfig::new(8, 16)))
-                .build_unchecked(StrategyKind::default())
-                .unwrap();
-            bake::bake(&mut renderer, (&scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
-        });
+        let (bvh, layout, atlas) = bake_small(&scene, 128, Bounces::Converged);
         let texel = 1.0 / layout.unwrapped.texels_per_unit;
         let shown = view::view(&scene, &bvh, (&layout.unwrapped, &atlas), scene.image, Vec3::ZERO);
         let mut dark = 0;
@@ -467,16 +474,7 @@ fn no_jump_across_chart_borders() {
     scene.mesh.shading = (scene.mesh.triangles.iter())
         .map(|t| t.v.map(|p| if on_ball(p) { (p - centre).normalize() } else { t.normal }))
         .collect();
-    let bvh = Bvh::build(&scene.mesh.triangles);
-    let layout = Layout::new(&scene, &bvh, Density::Side(128), 16384).unwrap();
-    let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(Bounces::Converged), Vec3::ZERO);
-    let atlas = common::gpu(|device| {
-        let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
-            .radiance_cache(Some(CacheConfig::new(8, 16)))
-            .build_unchecked(StrategyKind::default())
-            .unwrap();
-        bake::bake(&mut renderer, (&scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
-    });
+    let (_, layout, atlas) = bake_small(&scene, 128, Bounces::Converged);
     let (u, mesh) = (&layout.unwrapped, &scene.mesh);
     let light =
         |t: usize, p: Vec3| luminance(atlas.bilinear(u.page[t], interpolate(&mesh.triangles[t].v, &u.uv[t], p)));
@@ -580,16 +578,7 @@ fn a_wall_facing_out_of_its_room_is_baked_on_its_open_side() {
                 tri.normal = -tri.normal;
             }
         }
-        let bvh = Bvh::build(&scene.mesh.triangles);
-        let layout = Layout::new(&scene, &bvh, Density::Side(64), 16384).unwrap();
-        let frame = sensorlight::params::FrameParams::every_pixel(Indirect::Bounces(Bounces::Fixed(1)), Vec3::ZERO);
-        let atlas = common::gpu(|device| {
-            let mut renderer = Renderer::builder(device, &scene, SensorKind::Hemicube, 16)
-                .radiance_cache(Some(CacheConfig::new(8, 16)))
-                .build_unchecked(StrategyKind::default())
-                .unwrap();
-            bake::bake(&mut renderer, (&scene, &bvh), &layout, &frame, &Quiet).unwrap().atlas
-        });
+        let (_, layout, atlas) = bake_small(&scene, 64, Bounces::Fixed(1));
         let on_wall = (layout.texels.points.iter().enumerate())
             .filter_map(|(i, p)| p.filter(|p| wall.contains(&(p.triangle as usize))).map(|p| (i, p.back)));
         let (texels, backs): (Vec<usize>, Vec<bool>) = on_wall.unzip();

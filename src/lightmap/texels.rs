@@ -36,6 +36,8 @@ pub struct Texels {
     pub height: u32,
     pub pages: u32,
     pub points: Vec<Option<TexelPoint>>,
+    /// How far (scene units) the inside tests' rays start off the surface: the sensors' lift.
+    pub bias: f32,
     /// Texels whose own point lay inside geometry and were moved within their footprint, and those left
     /// to their neighbours (no point of their footprint outside).
     pub moved: u64,
@@ -47,6 +49,19 @@ pub struct Texels {
 /// The texel's point candidate: its distance from the texel's centre (texels; 0 inside), the triangle and
 /// the barycentric weights.
 type Candidate = (f32, u32, Vec2);
+
+/// Where a texel's point was placed ([`Texels::rasterise`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Placed {
+    /// Its own point (or none: outside every chart's reach).
+    Own,
+    /// Inside geometry: moved to the open part of its footprint.
+    Moved,
+    /// Inside geometry all over its footprint: left to its neighbours.
+    Buried,
+    /// Its front faces into geometry or out of the scene, its back into the scene: the back's light.
+    Back,
+}
 
 impl Texels {
     /// Rasterises `unwrapped`'s triangles of `mesh`; `bvh` (of the whole mesh) finds points inside geometry,
@@ -73,40 +88,44 @@ impl Texels {
                 }
             }
         }
-        // Points inside geometry: moved within the texel's footprint, else left to the neighbours.
-        let texel = 1.0 / size;
-        let moves: Vec<(Option<TexelPoint>, u8)> = best
+        // Points inside geometry: their back side where it looks into the scene, else moved within the
+        // texel's footprint, else left to the neighbours.
+        let placed: Vec<(Option<TexelPoint>, Placed)> = best
             .par_iter()
             .enumerate()
             .map(|(i, candidate)| {
-                let Some((_, triangle, bary)) = *candidate else { return (None, 0) };
+                let Some((_, triangle, bary)) = *candidate else { return (None, Placed::Own) };
                 let point = TexelPoint { triangle, bary, back: false };
+                let front = look(mesh, bvh, point, bias);
+                if front == Look::Scene {
+                    return (Some(point), Placed::Own);
+                }
+                // The back is tested only where the front does not look into the scene.
                 let back = TexelPoint { back: true, ..point };
-                match (look(mesh, bvh, point, bias), look(mesh, bvh, back, bias)) {
-                    (Look::Scene, _) => return (Some(point), 0),
-                    // Its front faces into geometry or out of the scene, its back into the scene.
-                    (_, Look::Scene) => return (Some(back), 3),
-                    (Look::Nothing, _) => return (Some(point), 0),
-                    (Look::Inside, _) => {}
+                match (front, look(mesh, bvh, back, bias)) {
+                    (_, Look::Scene) => return (Some(back), Placed::Back),
+                    (Look::Nothing, _) => return (Some(point), Placed::Own),
+                    _ => {}
                 }
                 let j = i % page_texels;
-                let centre = Vec2::new((j % w as usize) as f32 + 0.5, (j / w as usize) as f32 + 0.5) * texel;
-                let uv = &unwrapped.uv[triangle as usize];
-                let moved = footprint(centre, texel)
-                    .filter_map(|p| barycentric_2d(uv, p).filter(|b| in_triangle(*b)))
+                let centre = Vec2::new((j % w as usize) as f32 + 0.5, (j / w as usize) as f32 + 0.5);
+                let uv = unwrapped.uv[triangle as usize].map(|p| p * size);
+                let mut offsets = grid(4);
+                offsets.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
+                let moved = (offsets.into_iter())
+                    .filter_map(|o| barycentric_2d(&uv, centre + o).filter(|b| in_triangle(*b)))
                     .map(|bary| TexelPoint { triangle, bary, back: false })
                     .find(|p| !inside(mesh, bvh, *p, bias));
                 match moved {
-                    Some(p) => (Some(p), 1),
-                    None => (None, 2),
+                    Some(p) => (Some(p), Placed::Moved),
+                    None => (None, Placed::Buried),
                 }
             })
             .collect();
-        let moved = moves.iter().filter(|(_, m)| *m == 1).count() as u64;
-        let buried = moves.iter().filter(|(_, m)| *m == 2).count() as u64;
-        let backs = moves.iter().filter(|(_, m)| *m == 3).count() as u64;
-        let points = moves.into_iter().map(|(p, _)| p).collect();
-        Texels { width: w, height: h, pages, points, moved, buried, backs }
+        let count = |kind: Placed| placed.iter().filter(|(_, k)| *k == kind).count() as u64;
+        let (moved, buried, backs) = (count(Placed::Moved), count(Placed::Buried), count(Placed::Back));
+        let points = placed.into_iter().map(|(p, _)| p).collect();
+        Texels { width: w, height: h, pages, points, bias, moved, buried, backs }
     }
 
     /// The texels with a point.
@@ -144,7 +163,7 @@ impl Texels {
     /// [`FOOTPRINT`] points spread over texel `i`'s footprint: each on the triangle that covers it among
     /// those of the texel and its 8 neighbours, else (beyond its chart's border) the nearest point of
     /// texel i's own triangle; those inside geometry left out.
-    pub fn footprint(&self, i: usize, (mesh, bvh, bias): (&Mesh, &Bvh, f32), unwrapped: &Unwrapped) -> Vec<TexelPoint> {
+    pub fn footprint(&self, i: usize, (mesh, bvh): (&Mesh, &Bvh), unwrapped: &Unwrapped) -> Vec<TexelPoint> {
         let Some(point) = self.points[i] else { return Vec::new() };
         let (w, h) = (self.width as i64, self.height as i64);
         let (j, base) = (i as i64 % (w * h), i as i64 - i as i64 % (w * h));
@@ -159,10 +178,9 @@ impl Texels {
         near.sort_unstable();
         near.dedup();
         let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-        [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)]
-            .into_iter()
-            .filter_map(|(dx, dy)| {
-                let q = centre + Vec2::new(dx, dy);
+        (grid(FOOTPRINT_SIDE).into_iter())
+            .filter_map(|o| {
+                let q = centre + o;
                 let covering = near.iter().find_map(|&t| {
                     barycentric_2d(&corners(t), q).filter(|b| in_triangle(*b)).map(|bary| TexelPoint {
                         triangle: t,
@@ -172,7 +190,7 @@ impl Texels {
                 });
                 covering.or_else(|| nearest(&corners(point.triangle), q).map(|(_, bary)| TexelPoint { bary, ..point }))
             })
-            .filter(|p| !inside(mesh, bvh, *p, bias))
+            .filter(|p| !inside(mesh, bvh, *p, self.bias))
             .collect()
     }
 }
@@ -182,10 +200,11 @@ impl Texels {
 pub const CONTRAST: f32 = 0.1;
 
 /// Points a texel is taken over ([`Texels::footprint`]): 2 × 2, stratified.
-pub const FOOTPRINT: usize = 4;
+pub const FOOTPRINT_SIDE: usize = 2;
+pub const FOOTPRINT: usize = FOOTPRINT_SIDE * FOOTPRINT_SIDE;
 
-/// `points` as a G-buffer (one row, point i at pixel i; no surface where there is none), each facing its
-/// triangle's front.
+/// `points` as a G-buffer (one row, point i at pixel i; no surface where there is none), each facing the
+/// side of its triangle it stands for.
 pub fn gbuffer(mesh: &Mesh, points: &[Option<TexelPoint>]) -> GBufferData {
     let n = points.len();
     let mut g = GBufferData {
@@ -271,12 +290,10 @@ fn hits(mesh: &Mesh, bvh: &Bvh, p: TexelPoint, bias: f32) -> (usize, usize) {
     (backs, fronts)
 }
 
-/// A 4 × 4 grid of points over the texel of `centre` and size `texel` (atlas coordinates), nearest the
-/// centre first.
-fn footprint(centre: Vec2, texel: Vec2) -> impl Iterator<Item = Vec2> {
-    let mut offsets: Vec<Vec2> = (0..16).map(|k| Vec2::new((k % 4) as f32 - 1.5, (k / 4) as f32 - 1.5) / 4.0).collect();
-    offsets.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
-    offsets.into_iter().map(move |o| centre + o * texel)
+/// The centres of an `n` × `n` grid over a texel, as offsets from its centre, in texels.
+fn grid(n: usize) -> Vec<Vec2> {
+    let at = |k: usize| (k as f32 + 0.5) / n as f32 - 0.5;
+    (0..n * n).map(|k| Vec2::new(at(k % n), at(k / n))).collect()
 }
 
 /// The barycentric weights of corners 1 and 2 of `q` in the 2D triangle `c` (`None` if degenerate).

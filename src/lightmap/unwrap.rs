@@ -114,14 +114,13 @@ fn from_file(mesh: &Mesh, density: Density, max_side: u32) -> Result<std::result
     if let Some(t) = uv.iter().position(|c| c.iter().any(|p| p.min_element() < -1e-4 || p.max_element() > 1.0 + 1e-4)) {
         return Ok(Err(format!("TEXCOORD_1 of triangle {t} leaves [0, 1] ({:?})", uv[t])));
     }
+    // Surface area, and the page's share the coordinates cover: the density they give a side of texels.
+    let area = surface_area(local);
+    let uv_area: f64 = uv.iter().map(|c| ((c[1] - c[0]).perp_dot(c[2] - c[0]) / 2.0).abs() as f64).sum();
     let side = match density {
         Density::Side(side) => side,
         // The side at which the texels average `d` per unit of area.
-        Density::PerUnit(d) => {
-            let area: f64 = local.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
-            let uv_area: f64 = uv.iter().map(|c| ((c[1] - c[0]).perp_dot(c[2] - c[0]) / 2.0).abs() as f64).sum();
-            (d as f64 * (area / uv_area.max(1e-12)).sqrt()).ceil() as u32
-        }
+        Density::PerUnit(d) => (d as f64 * (area / uv_area.max(1e-12)).sqrt()).ceil() as u32,
     };
     ensure!(
         (1..=max_side).contains(&side),
@@ -135,8 +134,6 @@ fn from_file(mesh: &Mesh, density: Density, max_side: u32) -> Result<std::result
             texel / side
         )));
     }
-    let area: f64 = local.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
-    let uv_area: f64 = uv.iter().map(|c| ((c[1] - c[0]).perp_dot(c[2] - c[0]) / 2.0).abs() as f64).sum();
     Ok(Ok(Unwrapped {
         uv: uv.to_vec(),
         page: vec![0; uv.len()],
@@ -147,6 +144,11 @@ fn from_file(mesh: &Mesh, density: Density, max_side: u32) -> Result<std::result
         charts: 0,
         source: Source::File,
     }))
+}
+
+/// The triangles' area, summed in f64.
+fn surface_area(triangles: &[crate::scene::Triangle]) -> f64 {
+    triangles.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum()
 }
 
 /// The first texel centre of a `side`² page that two triangles of `uv` cover (strictly inside both), with
@@ -186,7 +188,7 @@ pub fn overlap(uv: &[[Vec2; 3]], side: u32) -> Option<(u32, usize, usize)> {
 fn make(mesh: &Mesh, density: Density, max_side: u32, why: Option<String>) -> Result<Unwrapped> {
     let triangles = mesh.local_triangles();
     if let Density::PerUnit(d) = density {
-        let area: f64 = triangles.iter().map(|t| crate::scene::triangle_area(&t.v) as f64).sum();
+        let area = surface_area(triangles);
         let longest = (triangles.iter())
             .flat_map(|t| [(0, 1), (1, 2), (2, 0)].map(|(i, j)| t.v[i].distance(t.v[j])))
             .fold(0.0f32, f32::max);
