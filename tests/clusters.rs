@@ -289,3 +289,100 @@ fn a_shape_of_many_surfaces_is_simplified_as_one() {
     assert!(!open.is_empty(), "the rims are open");
     assert!(open.iter().all(|(a, b)| !(inside(*a) || inside(*b))), "a crack between two flanks");
 }
+
+/// Every directed edge of the selected triangles, by its corners' positions (surfaces keep their own
+/// vertices), has exactly one twin the other way.
+fn assert_closed(c: &ClusterMesh, chosen: &[Cluster], what: &str) {
+    let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+    for k in chosen {
+        for t in c.triangles_of(k) {
+            for e in 0..3 {
+                let (a, b) = (bits(c.positions[t[e] as usize]), bits(c.positions[t[(e + 1) % 3] as usize]));
+                *edges.entry((a, b)).or_default() += 1;
+            }
+        }
+    }
+    for (&(a, b), &n) in &edges {
+        assert!(n == 1 && edges.get(&(b, a)) == Some(&1), "{what}: edge {a:?}–{b:?} used {n} times, or no twin");
+    }
+}
+
+/// The shortest distance from `p` to the triangle `t`.
+fn to_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> f32 {
+    let n = (b - a).cross(c - a).normalize();
+    let q = p - n * n.dot(p - a);
+    let inside = [(a, b), (b, c), (c, a)].iter().all(|&(u, v)| (v - u).cross(q - u).dot(n) >= 0.0);
+    if inside {
+        return (p - q).length();
+    }
+    let to_segment = |u: Vec3, v: Vec3| {
+        let t = ((p - u).dot(v - u) / (v - u).length_squared()).clamp(0.0, 1.0);
+        (p - (u + t * (v - u))).length()
+    };
+    to_segment(a, b).min(to_segment(b, c)).min(to_segment(c, a))
+}
+
+/// A part of one cluster (a small closed ball beside the big one) is drawn from afar at simpler levels,
+/// not at full detail until it vanishes: each level a quarter or less of the last, one level chosen per
+/// view and always closed, its error honest (the two surfaces lie within it of each other) and growing; an
+/// emitter of one cluster keeps its full detail.
+#[test]
+fn a_small_part_has_simpler_levels_each_closed() {
+    let ball = common::meshes::sphere(Vec3::new(3.0, 0.0, 0.0), 0.25, 6);
+    assert!(ball.len() <= clusters::MAX_TRIANGLES);
+    let mut lamp = common::meshes::plane(3.0, 4);
+    lamp.iter_mut().for_each(|t| t.swap(1, 2));
+    let mesh = common::meshes::mesh(&[
+        ("big", 0, common::meshes::sphere(Vec3::ZERO, 1.0, 32)),
+        ("small", 0, ball.clone()),
+        ("lamp", 1, lamp),
+    ]);
+    let c = clusters::build(&mesh);
+    let small_surface = |s: u32| mesh.surfaces[s as usize - 1].name.starts_with("small");
+    let small: Vec<Cluster> = c.clusters.iter().copied().filter(|k| small_surface(k.surface)).collect();
+    assert!(small.len() >= 2, "the small ball has simpler levels: {} clusters", small.len());
+    let full = small[0].triangles();
+    assert_eq!(full as usize, ball.len());
+    for (depth, pair) in small.windows(2).enumerate() {
+        let (finer, coarser) = (pair[0], pair[1]);
+        assert_eq!((finer.depth, coarser.depth), (depth as u32, depth as u32 + 1));
+        assert_eq!(finer.parent, coarser.own, "a level replaces exactly the one before");
+        assert!(coarser.triangles() * 4 <= finer.triangles() * 3, "{} → {}", finer.triangles(), coarser.triangles());
+        assert!(coarser.own.error > finer.own.error);
+        // Honest both ways: the mesh's corners and centroids lie within the error of the level's surface, and
+        // the level's edges' middles within it of the mesh's.
+        let level: Vec<[Vec3; 3]> =
+            c.triangles_of(&coarser).map(|t| t.map(|v| Vec3::from(c.positions[v as usize]))).collect();
+        let strays = |points: Vec<Vec3>, surface: &[[Vec3; 3]]| {
+            let nearest = |p: Vec3| surface.iter().map(|&t| to_triangle(p, t)).fold(f32::MAX, f32::min);
+            points.into_iter().map(nearest).fold(0.0f32, f32::max)
+        };
+        let corners_and_centroids = ball.iter().flat_map(|&[a, b, c]| [a, b, c, (a + b + c) / 3.0]).collect();
+        let middles = level.iter().flat_map(|&[a, b, c]| [(a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0]).collect();
+        let worst = strays(corners_and_centroids, &level).max(strays(middles, &ball));
+        assert!(
+            worst <= coarser.own.error * (1.0 + 1e-5),
+            "depth {}: {worst} off, error {}",
+            coarser.depth,
+            coarser.own.error
+        );
+    }
+    let coarsest = small.last().unwrap();
+    assert!(
+        coarsest.triangles() * 8 <= full,
+        "the coarsest of {} levels has {} of {full} triangles",
+        small.len(),
+        coarsest.triangles()
+    );
+    // From any viewpoint at any threshold: one level, closed, or nothing once the ball is under τ.
+    for eye in [Vec3::new(3.0, 0.0, 0.3), Vec3::new(0.0, 0.0, 3.0), Vec3::splat(40.0)] {
+        for tau in [0.0, 1e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 100.0] {
+            let chosen: Vec<Cluster> = small.iter().copied().filter(|k| selected(k, eye, 1e-4, tau)).collect();
+            assert!(chosen.len() <= 1, "eye {eye}, τ {tau}: {} levels at once", chosen.len());
+            assert_closed(&c, &chosen, &format!("eye {eye}, τ {tau}"));
+        }
+    }
+    let lamp: Vec<&Cluster> =
+        c.clusters.iter().filter(|k| mesh.surfaces[k.surface as usize - 1].name.starts_with("lamp")).collect();
+    assert!(lamp.len() == 1 && lamp[0].is_full_detail() && lamp[0].parent.error == f32::MAX, "{lamp:?}");
+}

@@ -9,8 +9,9 @@
 //! whose locked border kept it at 130 triangles however far away it was seen (58 000 triangles a sensor in
 //! a hall of columns). Within a part, each surface keeps its own vertices (welded within the surface), so
 //! where two surfaces meet meshoptimizer sees a seam: it may shorten it, moving both sides' vertices
-//! alike, but never opens it, and every triangle keeps the vertices, and so the surface, it had. A part as a
-//! whole vanishes where it projects under a view's accepted error (`Part::vanish_when_small`).
+//! alike, but never opens it, and every triangle keeps the vertices, and so the surface, it had. A part of
+//! one cluster, which `clusterlod` leaves as it is, gets simpler levels of its own (`Part::push_levels`).
+//! A part as a whole vanishes where it projects under a view's accepted error (`Part::vanish_when_small`).
 
 use glam::Vec3;
 use meshopt::{ClodMesh, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
@@ -18,12 +19,14 @@ use rayon::prelude::*;
 
 use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
 use crate::scene::surfaces::{FxBuild, weld};
-use crate::scene::{Aabb, Mesh};
+use crate::scene::{Aabb, Mesh, closest_on_triangle};
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
-pub const BUILD_VERSION: u32 = 6;
+pub const BUILD_VERSION: u32 = 7;
 /// Triangles per cluster at most (and vertices: meshoptimizer's default for rasterisation).
 pub const MAX_TRIANGLES: usize = 128;
+/// A small part's next level has at most this fraction of its previous level's triangles (1 / ratio).
+const LEVEL_RATIO: usize = 4;
 
 /// Clusters of one connected part of the mesh, indices local to its own vertices.
 struct Part {
@@ -49,7 +52,12 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
             let triangles: Vec<(&[Vec3; 3], u32)> =
                 surfaces.iter().flat_map(|&s| by_surface[s as usize].iter().map(move |&v| (v, s))).collect();
             let emitter = mesh.material_of(surfaces[0]).is_emitter();
-            let mut part = part_clusters(&triangles, surfaces[0], !emitter && triangles.len() > MAX_TRIANGLES);
+            let detail = match triangles.len() {
+                _ if emitter => Detail::Full,
+                n if n > MAX_TRIANGLES => Detail::Hierarchy,
+                _ => Detail::Levels,
+            };
+            let mut part = part_clusters(&triangles, surfaces[0], detail);
             if !emitter {
                 part.vanish_when_small();
             }
@@ -104,8 +112,19 @@ fn connected_parts(mesh: &Mesh) -> Vec<Vec<u32>> {
     parts.into_values().collect()
 }
 
+/// How a part is drawn from afar.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Detail {
+    /// At full detail only (an emitter: its light is sensed as it is).
+    Full,
+    /// As one cluster at successively simpler levels (a part of at most [`MAX_TRIANGLES`] triangles).
+    Levels,
+    /// Through meshoptimizer's cluster hierarchy.
+    Hierarchy,
+}
+
 /// The clusters of one part's `triangles` (each with its surface), carrying `surface`.
-fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, simplify: bool) -> Part {
+fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, detail: Detail) -> Part {
     // Vertices welded within each surface, numbered part-wide.
     let mut ids: std::collections::HashMap<(u32, [u32; 3]), u32, FxBuild> = Default::default();
     let mut positions: Vec<[f32; 3]> = Vec::new();
@@ -123,12 +142,19 @@ fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, simplify: bool) 
         }
     }
     let mut part = Part { surface, positions, vertex_surface, indices: Vec::new(), clusters: Vec::new() };
-    if !simplify {
-        // Full detail only: runs of the surface's triangles in file order.
-        for run in corners.chunks(3 * MAX_TRIANGLES) {
-            part.push(run, 0, ErrorBounds::default(), terminal());
+    match detail {
+        Detail::Full => {
+            // Runs of the surface's triangles in file order.
+            for run in corners.chunks(3 * MAX_TRIANGLES) {
+                part.push(run, 0, ErrorBounds::default(), terminal());
+            }
+            return part;
         }
-        return part;
+        Detail::Levels => {
+            part.push_levels(&corners);
+            return part;
+        }
+        Detail::Hierarchy => {}
     }
     let config = meshopt::ClodConfig {
         simplify_permissive: false,
@@ -168,6 +194,16 @@ fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, simplify: bool) 
     part
 }
 
+/// How far `from` strays from `to`, at most, sampled: the largest distance from a corner, an edge's middle
+/// or the centroid of a triangle of `from` to the nearest triangle of `to`. Quadratic: small parts only.
+fn hausdorff(from: &[[Vec3; 3]], to: &[[Vec3; 3]]) -> f32 {
+    let samples =
+        from.iter().flat_map(|&[a, b, c]| [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]);
+    samples
+        .map(|p| to.iter().map(|&[a, b, c]| closest_on_triangle(p, a, b, c).distance(p)).fold(f32::MAX, f32::min))
+        .fold(0.0, f32::max)
+}
+
 fn terminal() -> ErrorBounds {
     ErrorBounds { error: ErrorBounds::TERMINAL, ..Default::default() }
 }
@@ -184,6 +220,54 @@ impl Part {
             let error = (0.5 * part.diagonal()).max(c.own.error);
             c.parent = ErrorBounds::new(part.union(c.own.aabb()), error);
         }
+    }
+
+    /// A small part (one cluster) as a chain of levels, each from simplifying the full detail to a quarter
+    /// of the previous level's triangles, until a level no longer simplifies by a quarter. Without them, a
+    /// small part is drawn at full detail until it vanishes: Sponza's 656 leaves (45 triangles each) and
+    /// its other parts of one cluster were a quarter of the triangles its sensors drew. Regular
+    /// simplification, so a closed part stays closed; each level's error is measured against the full
+    /// detail, made monotonic, and its box is the part's.
+    fn push_levels(&mut self, corners: &[u32]) {
+        let bytes = typed_to_bytes(&self.positions);
+        let vertices = VertexDataAdapter::new(bytes, 12, 0).expect("positions are 12-byte vertices");
+        let options = meshopt::SimplifyOptions::ErrorAbsolute;
+        let mut levels: Vec<(Vec<u32>, f32)> = vec![(corners.to_vec(), ErrorBounds::FULL_DETAIL)];
+        loop {
+            let (previous, previous_error) = levels.last().expect("the full detail");
+            let target = previous.len() / 3 / LEVEL_RATIO;
+            if target < 1 {
+                break;
+            }
+            let mut estimate = 0.0;
+            let simpler = meshopt::simplify(corners, &vertices, 3 * target, f32::MAX, options, Some(&mut estimate));
+            if simpler.is_empty() || simpler.len() * 4 > previous.len() * 3 {
+                break;
+            }
+            // meshoptimizer's estimate, or the distance measured between the two surfaces where larger (on a
+            // small ball, the mesh's vertices lay 1.4 times the estimate from the simpler level); never 0 (a
+            // level coarser than the mesh is never full detail) and never below the last.
+            let (full, level) = (self.corners(corners), self.corners(&simpler));
+            let measured = hausdorff(&full, &level).max(hausdorff(&level, &full));
+            let error = estimate.max(measured).max(*previous_error).max(f32::MIN_POSITIVE);
+            levels.push((simpler, error));
+        }
+        let part = Aabb::of(self.positions.iter().map(|&p| Vec3::from(p)));
+        let bounds = |level: Option<&(Vec<u32>, f32)>| match level {
+            Some(&(_, error)) if error == ErrorBounds::FULL_DETAIL => ErrorBounds::default(),
+            Some(&(_, error)) => ErrorBounds::new(part, error),
+            None => terminal(),
+        };
+        for (depth, (indices, _)) in levels.iter().enumerate() {
+            let own = bounds(levels.get(depth));
+            let parent = bounds(levels.get(depth + 1));
+            self.push(indices, depth as u32, own, parent);
+        }
+    }
+
+    /// The triangles of `indices` by their corners.
+    fn corners(&self, indices: &[u32]) -> Vec<[Vec3; 3]> {
+        indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| Vec3::from(self.positions[t[k] as usize]))).collect()
     }
 
     fn push(&mut self, indices: &[u32], depth: u32, own: ErrorBounds, parent: ErrorBounds) {

@@ -10,9 +10,9 @@
 //! `projected(own) <= τ < projected(parent)` ([`select`]) takes exactly one version of every piece of
 //! surface and never cracks.
 //!
-//! Surfaces are simplified apart (a cluster never mixes surface ids, and a surface's border is locked, so
-//! surfaces still meet), and emitters are never simplified: their clusters are full detail at every
-//! threshold. Built hierarchies are cached per mesh ([`cache`]). A bounding tree over the clusters
+//! Connected parts are simplified apart, each keeping every triangle's surface (a surface's vertices are its
+//! own, so where surfaces meet they stay joined); a part of one cluster gets simpler levels of its own, and
+//! emitters are never simplified: their clusters are full detail at every threshold ([`build`]). Built hierarchies are cached per mesh ([`cache`]). A bounding tree over the clusters
 //! ([`tree`]) lets a viewpoint's selection skip whole regions and levels that it cannot take from.
 
 pub mod build;

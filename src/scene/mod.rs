@@ -29,8 +29,8 @@ use glam::Vec3;
 
 pub use camera::Camera;
 pub use geometry::{
-    Aabb, NO_SURFACE, SurfaceId, Triangle, at_barycentric, barycentric, interpolate, stratified_point, subdivision,
-    subdivision_centroids, triangle_area,
+    Aabb, NO_SURFACE, SurfaceId, Triangle, at_barycentric, barycentric, closest_on_triangle, interpolate,
+    stratified_point, subdivision, subdivision_centroids, triangle_area,
 };
 pub use kind::FileKind;
 pub use material::Material;

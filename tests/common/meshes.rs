@@ -42,35 +42,25 @@ pub fn plane(y: f32, n: usize) -> Vec<[Vec3; 3]> {
 
 /// A sphere (surface 1), a finely tessellated floor (surface 2) and a finely tessellated emitter (surface 3).
 pub fn scene() -> Mesh {
-    let materials =
-        vec![Material::new("grey", Vec3::splat(0.5), Vec3::ZERO), Material::new("lamp", Vec3::ZERO, Vec3::ONE)];
     let mut lamp = plane(3.0, 24);
     lamp.iter_mut().for_each(|t| t.swap(1, 2)); // facing down
-    let groups = [
-        Group {
-            name: "ball".into(),
-            material: 0,
-            triangles: sphere(Vec3::ZERO, 1.0, 64),
+    mesh(&[("ball", 0, sphere(Vec3::ZERO, 1.0, 64)), ("floor", 0, plane(-1.5, 48)), ("lamp", 1, lamp)])
+}
+
+/// A mesh of named groups of `triangles`, each grey (material 0) or a lamp (material 1).
+pub fn mesh(groups: &[(&str, usize, Vec<[Vec3; 3]>)]) -> Mesh {
+    let materials =
+        vec![Material::new("grey", Vec3::splat(0.5), Vec3::ZERO), Material::new("lamp", Vec3::ZERO, Vec3::ONE)];
+    let groups: Vec<Group> = groups
+        .iter()
+        .map(|(name, material, triangles)| Group {
+            name: name.to_string(),
+            material: *material,
+            triangles: triangles.clone(),
             normals: Vec::new(),
             uvs: Vec::new(),
             lightmap_uvs: Vec::new(),
-        },
-        Group {
-            name: "floor".into(),
-            material: 0,
-            triangles: plane(-1.5, 48),
-            normals: Vec::new(),
-            uvs: Vec::new(),
-            lightmap_uvs: Vec::new(),
-        },
-        Group {
-            name: "lamp".into(),
-            material: 1,
-            triangles: lamp,
-            normals: Vec::new(),
-            uvs: Vec::new(),
-            lightmap_uvs: Vec::new(),
-        },
-    ];
+        })
+        .collect();
     Mesh::new(&groups, materials, Vec::new(), &mut Vec::new()).unwrap()
 }
