@@ -6,8 +6,8 @@
 // One invocation per (node, view) pair of depth `step`: step 0 takes the root for every view; later steps
 // take the pairs the step before queued. An inner node queues each child the view may keep something of;
 // a leaf tests its clusters. Dropped, for a cluster's sphere or a node's (which holds its clusters'): wholly
-// behind the sensor's tangent plane (for a cluster also its slab: clusters::reach), outside the view's four
-// side planes or one of its clip planes, not an emitter in an emitters-only view; and clusters whose level
+// behind the sensor's tangent plane (for a cluster also its slab, clusters::reach, and its box), outside the
+// view's four side planes or one of its clip planes (for a cluster also by its box), not an emitter in an emitters-only view; and clusters whose level
 // is not the one selected by `own error <= tau < parent error` (projected from the sensor; tau is half the
 // view's centre texel), nodes where no cluster below can be (their largest parent error projects to at
 // most tau, or their smallest own error to more). CPU twins: passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
@@ -52,6 +52,25 @@ bool sees(GpuSensorView view, GpuSensor s, vec4 sphere, uint flags) {
     vec4 w = row(m, 3);
     for (int i = 0; i < 2; i++) {
         keep = keep && !outside(w + row(m, i), sphere) && !outside(w - row(m, i), sphere);
+    }
+    return keep;
+}
+
+// Whether the view may see anything within the box [lo, hi] (passes::cull::box_sees): it reaches above the
+// sensor's tangent plane, and inside every side and clip plane (each plane's farthest corner of the box).
+bool inside(vec4 plane, vec3 lo, vec3 hi) {
+    return dot(plane.xyz, mix(lo, hi, greaterThanEqual(plane.xyz, vec3(0.0)))) + plane.w >= 0.0;
+}
+
+bool box_sees(GpuSensorView view, GpuSensor s, vec3 lo, vec3 hi) {
+    bool keep = inside(vec4(s.n.xyz, -dot(s.n.xyz, s.origin.xyz)), lo, hi);
+    for (int i = 0; i < 4; i++) {
+        keep = keep && inside(view.clip[i], lo, hi);
+    }
+    mat4 m = view.view_proj;
+    vec4 w = row(m, 3);
+    for (int i = 0; i < 2; i++) {
+        keep = keep && inside(w + row(m, i), lo, hi) && inside(w - row(m, i), lo, hi);
     }
     return keep;
 }
@@ -107,7 +126,8 @@ void main() {
     if ((here.flags & NODE_LEAF) != 0u) {
         for (uint j = 0u; j < here.count; j++) {
             GpuCluster k = clusters[items[here.first + j]];
-            bool keep = sees(view, s, k.sphere, k.flags) && reach(k.sphere, k.slab, s.n.xyz) >= dot(s.n.xyz, eye)
+            bool keep = sees(view, s, k.sphere, k.flags) && box_sees(view, s, k.box_min.xyz, k.box_max.xyz)
+                && reach(k.sphere, k.slab, s.n.xyz) >= dot(s.n.xyz, eye)
                 && projected(k.own_min, k.own_max, eye) <= tau && projected(k.parent_min, k.parent_max, eye) > tau;
             if (keep) {
                 uint slot = atomicAdd(counts[v], 1u);

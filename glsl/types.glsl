@@ -255,6 +255,8 @@ const float PI = 3.14159265358979323846;
 struct GpuCluster {
     vec4 sphere;      // bounding sphere of its triangles
     vec4 slab;        // the slab holding them: unit axis, half thickness about the sphere's centre
+    vec4 box_min;     // the box of its triangles (xyz; w unused)
+    vec4 box_max;
     vec4 own_min;     // its own error bound's box; w: its error (0: full detail)
     vec4 own_max;
     vec4 parent_min;  // its parent's; w: its error (FLT_MAX: terminal)

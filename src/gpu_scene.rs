@@ -16,7 +16,7 @@ use crate::gpu_types::{
     GpuEmitterChunk, GpuLightGroup, GpuSky, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
-use crate::scene::{Mesh, Scene, SkyMap, Texture};
+use crate::scene::{Aabb, Mesh, Scene, SkyMap, Texture};
 use crate::vk::{Buffer, Device, transfer};
 
 pub struct GpuScene {
@@ -175,9 +175,13 @@ pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Ve
         .iter()
         .map(|k| {
             let ([own_min, own_max], [parent_min, parent_max]) = (gpu_bounds(&k.own), gpu_bounds(&k.parent));
+            let corners =
+                Aabb::of(clusters.triangles_of(k).flatten().map(|v| Vec3::from(clusters.positions[v as usize])));
             GpuCluster {
                 sphere: Vec4::from(k.sphere),
                 slab: Vec4::from(k.slab),
+                box_min: corners.min.extend(0.0),
+                box_max: corners.max.extend(0.0),
                 own_min,
                 own_max,
                 parent_min,

@@ -152,3 +152,57 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
         (0..gpu.len()).filter(ball).filter(|&i| gpu[i].own_min.w == 0.0).map(|i| gpu[i].index_count / 3).sum();
     assert!(drawn > 0 && drawn * 10 < full, "the far sensor draws {drawn} of the sphere's {full} triangles");
 }
+
+/// A cluster's box bounds it against a view's planes far more tightly than its sphere where clusters are
+/// long strips (a fluted column's flanks), and never drops a cluster with a corner inside the view: on the
+/// test hall, sensors on its triangles draw at most 60 % of what the sphere alone kept (32 % measured; 37 %
+/// in the 0.55M-triangle hall).
+#[test]
+fn a_clusters_box_culls_what_its_sphere_cannot_and_nothing_in_view() {
+    use glam::Vec4Swizzles as _;
+    use sensorlight::passes::cull::box_sees;
+    let scene = common::hall::hall(16, 8, (32, 24));
+    let mesh = &scene.mesh;
+    let hierarchy = clusters::build(mesh);
+    let gpu = gpu_clusters(&hierarchy, |s| mesh.material_of(s).is_emitter());
+    let frames: Vec<SensorFrame> = (0..64)
+        .map(|i| {
+            let t = &mesh.triangles[(i * 7919 + 13) % mesh.triangles.len()];
+            SensorFrame::new((t.v[0] + t.v[1] + t.v[2]) / 3.0, t.normal, 1e-3)
+        })
+        .collect();
+    let layout = SensorLayout { kind: SensorKind::Hemicube, groups: 0 };
+    let (rd, near) = (32, 1e-3);
+    let batch = BatchViews::new(&frames, &layout, near, &[], rd);
+    let (mut with_box, mut sphere_only, mut corners_inside) = (0u64, 0u64, 0usize);
+    for (v, view) in batch.views.iter().enumerate() {
+        let sensor = &batch.sensors[v / batch.per_sensor];
+        let m = view.view_proj;
+        let (r0, r1, w) = (m.row(0), m.row(1), m.row(3));
+        let (n, origin) = (sensor.n.xyz(), sensor.origin.xyz());
+        let mut planes = vec![w + r0, w - r0, w + r1, w - r1, n.extend(-n.dot(origin))];
+        planes.extend(view.clip);
+        let inside = |p: Vec3| planes.iter().all(|q| q.xyz().dot(p) + q.w > 0.0);
+        for (k, cluster) in gpu.iter().zip(&hierarchy.clusters) {
+            let (lo, hi) = (k.box_min.xyz(), k.box_max.xyz());
+            let seen = box_sees(view, sensor, lo, hi);
+            let corners =
+                hierarchy.triangles_of(cluster).flatten().map(|i| Vec3::from(hierarchy.positions[i as usize]));
+            if corners.into_iter().any(inside) {
+                corners_inside += 1;
+                assert!(seen, "view {v}: a cluster with a corner in view is dropped by its box");
+            }
+            if keeps(k, view, sensor, rd, near) {
+                with_box += k.index_count as u64 / 3;
+            }
+            if sensorlight::passes::cull::sees(view, sensor, k.sphere, k.flags)
+                && clusters::reach(k.sphere.into(), k.slab.into(), n) >= n.dot(origin)
+                && clusters::selected(cluster, origin, near, sensorlight::passes::cull::accepted_error(view, rd))
+            {
+                sphere_only += k.index_count as u64 / 3;
+            }
+        }
+    }
+    assert!(corners_inside > 1000, "{corners_inside} (cluster, view) pairs with a corner in view");
+    assert!(with_box * 10 <= sphere_only * 6, "the box keeps {with_box} triangles, the sphere {sphere_only}");
+}

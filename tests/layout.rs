@@ -115,6 +115,8 @@ fn shared_structs_match_glsl() {
             rust_layout!(
                 GpuCluster: sphere,
                 slab,
+                box_min,
+                box_max,
                 own_min,
                 own_max,
                 parent_min,

@@ -24,7 +24,7 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use ash::vk;
-use glam::{Mat4, Vec4, Vec4Swizzles as _};
+use glam::{Mat4, Vec3, Vec4, Vec4Swizzles as _};
 
 use crate::clusters;
 use crate::gpu_scene::{TreeShape, bounds_from_gpu};
@@ -139,6 +139,7 @@ pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd:
     let (eye, n) = (sensor.origin.xyz(), sensor.n.xyz());
     let tau = accepted_error(view, rd);
     sees(view, sensor, cluster.sphere, cluster.flags)
+        && box_sees(view, sensor, cluster.box_min.xyz(), cluster.box_max.xyz())
         && clusters::reach(cluster.sphere.into(), cluster.slab.into(), n) >= n.dot(eye)
         && clusters::projected_error(&bounds_from_gpu(cluster.own_min, cluster.own_max), eye, near) <= tau
         && clusters::projected_error(&bounds_from_gpu(cluster.parent_min, cluster.parent_max), eye, near) > tau
@@ -157,6 +158,18 @@ pub fn sees(view: &GpuSensorView, sensor: &GpuSensor, sphere: Vec4, flags: u32) 
     let m: Mat4 = view.view_proj;
     let (r0, r1, w) = (m.row(0), m.row(1), m.row(3));
     !view.clip.iter().any(|&p| outside(p)) && ![w + r0, w - r0, w + r1, w - r1].into_iter().any(outside)
+}
+
+/// Whether `view` may see anything within the box `[lo, hi]`: it reaches above the sensor's tangent plane,
+/// and inside every side and clip plane of the view (each plane's farthest corner of the box).
+pub fn box_sees(view: &GpuSensorView, sensor: &GpuSensor, lo: Vec3, hi: Vec3) -> bool {
+    let inside = |plane: Vec4| plane.xyz().dot(Vec3::select(plane.xyz().cmpge(Vec3::ZERO), hi, lo)) + plane.w >= 0.0;
+    let (n, origin) = (sensor.n.xyz(), sensor.origin.xyz());
+    let m: Mat4 = view.view_proj;
+    let (r0, r1, w) = (m.row(0), m.row(1), m.row(3));
+    inside(n.extend(-n.dot(origin)))
+        && view.clip.iter().all(|&p| inside(p))
+        && [w + r0, w - r0, w + r1, w - r1].into_iter().all(inside)
 }
 
 /// The error (radians) a view accepts: half its centre texel, `1 / (rd · scale)`.
