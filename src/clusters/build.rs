@@ -52,12 +52,12 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
             let triangles: Vec<(&[Vec3; 3], u32)> =
                 surfaces.iter().flat_map(|&s| by_surface[s as usize].iter().map(move |&v| (v, s))).collect();
             let emitter = mesh.material_of(surfaces[0]).is_emitter();
-            let detail = match triangles.len() {
-                _ if emitter => Detail::Full,
-                n if n > MAX_TRIANGLES => Detail::Hierarchy,
-                _ => Detail::Levels,
+            let lod = match triangles.len() {
+                _ if emitter => PartLod::FullOnly,
+                n if n > MAX_TRIANGLES => PartLod::Hierarchy,
+                _ => PartLod::Levels,
             };
-            let mut part = part_clusters(&triangles, surfaces[0], detail);
+            let mut part = part_clusters(&triangles, surfaces[0], lod);
             if !emitter {
                 part.vanish_when_small();
             }
@@ -114,9 +114,9 @@ fn connected_parts(mesh: &Mesh) -> Vec<Vec<u32>> {
 
 /// How a part is drawn from afar.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Detail {
+enum PartLod {
     /// At full detail only (an emitter: its light is sensed as it is).
-    Full,
+    FullOnly,
     /// As one cluster at successively simpler levels (a part of at most [`MAX_TRIANGLES`] triangles).
     Levels,
     /// Through meshoptimizer's cluster hierarchy.
@@ -124,7 +124,7 @@ enum Detail {
 }
 
 /// The clusters of one part's `triangles` (each with its surface), carrying `surface`.
-fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, detail: Detail) -> Part {
+fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, lod: PartLod) -> Part {
     // Vertices welded within each surface, numbered part-wide.
     let mut ids: std::collections::HashMap<(u32, [u32; 3]), u32, FxBuild> = Default::default();
     let mut positions: Vec<[f32; 3]> = Vec::new();
@@ -142,19 +142,19 @@ fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, detail: Detail) 
         }
     }
     let mut part = Part { surface, positions, vertex_surface, indices: Vec::new(), clusters: Vec::new() };
-    match detail {
-        Detail::Full => {
+    match lod {
+        PartLod::FullOnly => {
             // Runs of the surface's triangles in file order.
             for run in corners.chunks(3 * MAX_TRIANGLES) {
                 part.push(run, 0, ErrorBounds::default(), terminal());
             }
             return part;
         }
-        Detail::Levels => {
+        PartLod::Levels => {
             part.push_levels(&corners);
             return part;
         }
-        Detail::Hierarchy => {}
+        PartLod::Hierarchy => {}
     }
     let config = meshopt::ClodConfig {
         simplify_permissive: false,
@@ -194,8 +194,9 @@ fn part_clusters(triangles: &[(&[Vec3; 3], u32)], surface: u32, detail: Detail) 
     part
 }
 
-/// How far `from` strays from `to`, at most, sampled: the largest distance from a corner, an edge's middle
-/// or the centroid of a triangle of `from` to the nearest triangle of `to`. Quadratic: small parts only.
+/// The directed Hausdorff distance from `from` to `to`, sampled: the largest distance from a corner, an
+/// edge's middle or the centroid of a triangle of `from` to the nearest triangle of `to`. Quadratic: small
+/// parts only.
 fn hausdorff(from: &[[Vec3; 3]], to: &[[Vec3; 3]]) -> f32 {
     let samples =
         from.iter().flat_map(|&[a, b, c]| [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0, (a + b + c) / 3.0]);
