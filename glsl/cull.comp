@@ -7,10 +7,11 @@
 // take the pairs the step before queued. An inner node queues each child the view may keep something of;
 // a leaf tests its clusters. Dropped, for a cluster's sphere or a node's (which holds its clusters'): wholly
 // behind the sensor's tangent plane (for a cluster also its slab, clusters::reach, and its box), outside the
-// view's four side planes or one of its clip planes (for a cluster also by its box), not an emitter in an emitters-only view; and clusters whose level
-// is not the one selected by `own error <= tau < parent error` (projected from the sensor; tau is half the
-// view's centre texel), nodes where no cluster below can be (their largest parent error projects to at
-// most tau, or their smallest own error to more). CPU twins: passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
+// view's four side planes or one of its clip planes (for a cluster also by its box), not an emitter in an
+// emitters-only view; and clusters whose level is not the one selected by `own error <= tau < parent error`
+// (projected from the sensor; tau is half the view's centre texel), nodes where no cluster below can be
+// (their largest parent error projects to at most tau, or their smallest own error to more). CPU twins:
+// passes::cull::keeps (what the walk keeps), clusters::TreeNode::may_select.
 #include "types.glsl"
 
 layout(local_size_x = 64) in;
