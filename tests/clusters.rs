@@ -271,15 +271,7 @@ fn a_shape_of_many_surfaces_is_simplified_as_one() {
     let eye = Vec3::new(0.0, 3.0, 60.0);
     let chosen: Vec<Cluster> =
         c.clusters.iter().filter(column).copied().filter(|k| selected(k, eye, 1e-3, 0.02)).collect();
-    let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
-    for k in &chosen {
-        for t in c.triangles_of(k) {
-            for e in 0..3 {
-                let (a, b) = (bits(c.positions[t[e] as usize]), bits(c.positions[t[(e + 1) % 3] as usize]));
-                *edges.entry((a, b)).or_default() += 1;
-            }
-        }
-    }
+    let edges = edges_by_position(&c, &chosen);
     // The shafts are open tubes: only their top and bottom rims may have no twin.
     let inside = |p: [u32; 3]| {
         let y = f32::from_bits(p[1]);
@@ -290,10 +282,10 @@ fn a_shape_of_many_surfaces_is_simplified_as_one() {
     assert!(open.iter().all(|(a, b)| !(inside(*a) || inside(*b))), "a crack between two flanks");
 }
 
-/// Every directed edge of the selected triangles, by its corners' positions (surfaces keep their own
-/// vertices), has exactly one twin the other way.
-fn assert_closed(c: &ClusterMesh, chosen: &[Cluster], what: &str) {
-    let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+/// How often each directed edge of the selected triangles occurs, by its corners' positions (surfaces keep
+/// their own vertices, so ids differ across a seam).
+fn edges_by_position(c: &ClusterMesh, chosen: &[Cluster]) -> HashMap<([u32; 3], [u32; 3]), i32> {
+    let mut edges = HashMap::new();
     for k in chosen {
         for t in c.triangles_of(k) {
             for e in 0..3 {
@@ -302,6 +294,13 @@ fn assert_closed(c: &ClusterMesh, chosen: &[Cluster], what: &str) {
             }
         }
     }
+    edges
+}
+
+/// Every directed edge of the selected triangles, by its corners' positions, has exactly one twin the
+/// other way.
+fn assert_closed(c: &ClusterMesh, chosen: &[Cluster], what: &str) {
+    let edges = edges_by_position(c, chosen);
     for (&(a, b), &n) in &edges {
         assert!(n == 1 && edges.get(&(b, a)) == Some(&1), "{what}: edge {a:?}–{b:?} used {n} times, or no twin");
     }

@@ -233,6 +233,7 @@ impl Part {
         let bytes = typed_to_bytes(&self.positions);
         let vertices = VertexDataAdapter::new(bytes, 12, 0).expect("positions are 12-byte vertices");
         let options = meshopt::SimplifyOptions::ErrorAbsolute;
+        let full = self.corners(corners);
         let mut levels: Vec<(Vec<u32>, f32)> = vec![(corners.to_vec(), ErrorBounds::FULL_DETAIL)];
         loop {
             let (previous, previous_error) = levels.last().expect("the full detail");
@@ -248,7 +249,7 @@ impl Part {
             // meshoptimizer's estimate, or the distance measured between the two surfaces where larger (on a
             // small ball, the mesh's vertices lay 1.4 times the estimate from the simpler level); never 0 (a
             // level coarser than the mesh is never full detail) and never below the last.
-            let (full, level) = (self.corners(corners), self.corners(&simpler));
+            let level = self.corners(&simpler);
             let measured = hausdorff(&full, &level).max(hausdorff(&level, &full));
             let error = estimate.max(measured).max(*previous_error).max(f32::MIN_POSITIVE);
             levels.push((simpler, error));

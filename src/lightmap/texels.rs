@@ -89,7 +89,9 @@ impl Texels {
             }
         }
         // Points inside geometry: their back side where it looks into the scene, else moved within the
-        // texel's footprint, else left to the neighbours.
+        // texel's footprint (a 4 × 4 grid over it, nearest the centre first), else left to the neighbours.
+        let mut offsets = grid(4);
+        offsets.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
         let placed: Vec<(Option<TexelPoint>, Placed)> = best
             .par_iter()
             .enumerate()
@@ -110,10 +112,8 @@ impl Texels {
                 let j = i % page_texels;
                 let centre = Vec2::new((j % w as usize) as f32 + 0.5, (j / w as usize) as f32 + 0.5);
                 let uv = unwrapped.uv[triangle as usize].map(|p| p * size);
-                let mut offsets = grid(4);
-                offsets.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
-                let moved = (offsets.into_iter())
-                    .filter_map(|o| barycentric_2d(&uv, centre + o).filter(|b| in_triangle(*b)))
+                let moved = (offsets.iter())
+                    .filter_map(|&o| barycentric_2d(&uv, centre + o).filter(|b| in_triangle(*b)))
                     .map(|bary| TexelPoint { triangle, bary, back: false })
                     .find(|p| !inside(mesh, bvh, *p, bias));
                 match moved {
