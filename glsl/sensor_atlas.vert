@@ -17,7 +17,7 @@ out gl_PerVertex {
 
 void main() {
     // firstInstance of the draw is the view drawn.
-    GpuSensorView view = views[gl_InstanceIndex];
+    uint view = uint(gl_InstanceIndex);
     float clip[4];
     gl_Position = sensor_vertex(view, clip);
     gl_ClipDistance = clip;

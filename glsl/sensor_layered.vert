@@ -12,9 +12,9 @@ out gl_PerVertex {
 
 void main() {
     // firstInstance of the draw is the first view drawn.
-    GpuSensorView view = views[gl_InstanceIndex];
+    uint view = uint(gl_InstanceIndex);
     float clip[4];
     gl_Position = sensor_vertex(view, clip);
     gl_ClipDistance = clip;
-    gl_Layer = int(view.layer - push.layer_base);
+    gl_Layer = int(views[view].layer - push.layer_base);
 }

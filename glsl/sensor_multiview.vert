@@ -11,7 +11,7 @@ out gl_PerVertex {
 };
 
 void main() {
-    GpuSensorView view = views[push.first_view + uint(gl_ViewIndex)];
+    uint view = push.first_view + uint(gl_ViewIndex);
     float clip[4];
     gl_Position = sensor_vertex(view, clip);
     gl_ClipDistance = clip;

@@ -1,6 +1,6 @@
-// Ck of both sides of a triangle (paper §III-C), flat across it: what the raster strategies' vertex
-// shaders (sensor_common.glsl) and the compute rasterizer (sensor_compute.comp) prepare for
-// sensor_shade.glsl to pick from by the side seen.
+// Ck of both sides of a triangle (paper §III-C), flat across it: what the raster strategies' fragment
+// shader (sensor.frag) and the compute rasterizer (sensor_compute.comp) prepare for sensor_shade.glsl to
+// pick from by the side seen.
 #ifndef SENSOR_SIDES_GLSL
 #define SENSOR_SIDES_GLSL
 #include "types.glsl"

@@ -133,12 +133,12 @@ impl SensorPipeline {
         let render_pass = RenderPass::new(device, &[MAP_FORMAT], Some(DEPTH_FORMAT), view_mask)?;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let (vertex_stage, fragment_stage) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::FRAGMENT);
-        // Views, materials and texture coordinates for the vertex shader, the radiance cache, materials and
-        // textures (the `TEXTURES` variant) for the fragment shader.
+        // Views and materials for both shaders, texture coordinates for the vertex shader, the radiance
+        // cache and textures (the `TEXTURES` variant) for the fragment shader.
         let layout = PipelineLayout::new(
             device,
             &[
-                (0, storage, vertex_stage),
+                (0, storage, vertex_stage | fragment_stage),
                 (1, storage, vertex_stage | fragment_stage),
                 (2, storage, fragment_stage),
                 (3, storage, fragment_stage),
