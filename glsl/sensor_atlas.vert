@@ -16,8 +16,8 @@ out gl_PerVertex {
 };
 
 void main() {
-    // firstInstance of the draw is the view drawn.
-    uint view = uint(gl_InstanceIndex);
+    // The instance (firstInstance: the view drawn), or the push constants' view for a per-view list.
+    uint view = draw_view();
     float clip[4];
     gl_Position = sensor_vertex(view, clip);
     gl_ClipDistance = clip;

@@ -18,6 +18,17 @@ layout(std430, set = 0, binding = 5) readonly buffer Uvs { vec2 uvs[]; };
 #endif
 layout(push_constant) uniform Push { SensorPush push; };
 
+// Drawn from the culling pass's per-view lists, each draw is one view, named in the push constants: a value
+// the whole draw shares, whose view a CPU rasterizer loads once, where it loads `views[gl_InstanceIndex]`
+// vertex by vertex (lavapipe: a sensor in a real interior 0.75× as costly, docs/BENCHMARKS.md). Drawn
+// whole, one instanced draw covers many views, the instance naming each.
+layout(constant_id = 0) const bool VIEW_PER_DRAW = false;
+
+// The view this vertex is drawn in, for the layered and atlas strategies (multiview names its own).
+uint draw_view() {
+    return VIEW_PER_DRAW ? push.first_view : uint(gl_InstanceIndex);
+}
+
 // Only what varies across a triangle or names it: the fragment shader reads the rest (both sides' Ck, the
 // view's eye and flags) from `surfaces` and `views` itself. On a CPU rasterizer every output costs setup
 // and binning per triangle, and a sensor draws thousands of triangles over few texels.

@@ -11,8 +11,8 @@ out gl_PerVertex {
 };
 
 void main() {
-    // firstInstance of the draw is the first view drawn.
-    uint view = uint(gl_InstanceIndex);
+    // The instance (firstInstance: the first view drawn), or the push constants' view for a per-view list.
+    uint view = draw_view();
     float clip[4];
     gl_Position = sensor_vertex(view, clip);
     gl_ClipDistance = clip;

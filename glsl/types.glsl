@@ -88,7 +88,7 @@ struct GpuSensorResult {
 
 struct SensorPush {
     float epsilon;       // non-emitters return Kd * epsilon (paper eq. 2)
-    uint first_view;     // first entry of the view buffer for this draw (multiview)
+    uint first_view;     // first entry of the view buffer for this draw (multiview; a per-view list's view)
     uint layer_base;     // subtracted from a view's layer (layered strategies)
     uint exact;          // 1: emitter fronts leave 0 and their group; 0: they leave Ke (the paper's)
     float emission_scale;  // the paper's: emitter fronts leave Ke / emission_scale (a power of two, f16 range)

@@ -186,7 +186,8 @@ pub struct GpuSensorResult {
 pub struct SensorPush {
     /// `Kd·ε` is what a non-emitting surface returns (paper eq. 2).
     pub epsilon: f32,
-    /// First entry of the view buffer this draw reads (multiview: view of `gl_ViewIndex` 0).
+    /// First entry of the view buffer this draw reads (multiview: view of `gl_ViewIndex` 0; a draw from a
+    /// per-view list: its view).
     pub first_view: u32,
     /// Subtracted from a view's layer: the first layer of the framebuffer (layered strategies).
     pub layer_base: u32,

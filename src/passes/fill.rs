@@ -43,6 +43,7 @@ impl FillPass {
             &layout,
             &GraphicsDesc {
                 vertex: shaders::FILL_VERT,
+                vertex_constants: &[],
                 fragment: shaders::FILL_FRAG,
                 render_pass: render_pass.raw,
                 color_attachments: 1,

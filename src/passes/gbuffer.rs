@@ -80,6 +80,7 @@ impl GBufferPass {
             &layout,
             &GraphicsDesc {
                 vertex: shaders::GBUFFER_VERT,
+                vertex_constants: &[],
                 fragment: shaders::GBUFFER_FRAG,
                 render_pass: render_pass.raw,
                 color_attachments: ATTACHMENT_COUNT,

@@ -122,7 +122,17 @@ impl Pipeline {
     pub fn graphics(device: &Arc<Device>, layout: &PipelineLayout, desc: &GraphicsDesc<'_>) -> Result<Self> {
         let vertex = ShaderModule::new(device, desc.vertex)?;
         let fragment = ShaderModule::new(device, desc.fragment)?;
-        let stages = [vertex.stage(vk::ShaderStageFlags::VERTEX), fragment.stage(vk::ShaderStageFlags::FRAGMENT)];
+        // Constant i of the vertex shader is `vertex_constants[i]` (4 bytes each: a uint or a bool).
+        let entries: Vec<_> = (0..desc.vertex_constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
+            .collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(desc.vertex_constants));
+        let stages = [
+            vertex.stage(vk::ShaderStageFlags::VERTEX).specialization_info(&specialization),
+            fragment.stage(vk::ShaderStageFlags::FRAGMENT),
+        ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)
             .stride(desc.vertex_stride)
@@ -190,6 +200,8 @@ impl Pipeline {
 /// and emitters decide their side in the fragment shader from `gl_FrontFacing` (CCW = front).
 pub struct GraphicsDesc<'a> {
     pub vertex: &'a [u8],
+    /// The vertex shader's specialization constants, by `constant_id` from 0 (empty for none).
+    pub vertex_constants: &'a [u32],
     pub fragment: &'a [u8],
     pub render_pass: vk::RenderPass,
     pub color_attachments: u32,

@@ -150,11 +150,16 @@ impl SensorPipeline {
             size_of::<SensorPush>() as u32,
             vertex_stage | fragment_stage,
         )?;
+        let inputs = SensorInputs::new(device, scene, desc, cull);
+        // Drawn from per-view lists, a draw's view comes from the push constants (VIEW_PER_DRAW,
+        // sensor_common.glsl).
+        let view_per_draw = inputs.culled.is_some() as u32;
         let pipeline = Pipeline::graphics(
             device,
             &layout,
             &GraphicsDesc {
                 vertex: vertex[scene.textured as usize],
+                vertex_constants: &[view_per_draw],
                 fragment: if scene.textured { shaders::SENSOR_FRAG_TEXTURES } else { shaders::SENSOR_FRAG },
                 render_pass: render_pass.raw,
                 color_attachments: 1,
@@ -163,7 +168,7 @@ impl SensorPipeline {
                 depth_compare: Some(DEPTH_COMPARE),
             },
         )?;
-        Ok(Self { pipeline, layout, render_pass, inputs: SensorInputs::new(device, scene, desc, cull) })
+        Ok(Self { pipeline, layout, render_pass, inputs })
     }
 
     pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
@@ -205,9 +210,9 @@ impl SensorPipeline {
             None => self.draw(pass, push, count, first),
             Some(d) => {
                 let push = self.inputs.push(push);
-                pass.push(&self.layout, &push);
                 let stride = size_of::<GpuDrawCommand>() as u64;
                 for v in first..first + count {
+                    pass.push(&self.layout, &SensorPush { first_view: v, ..push });
                     let offset = v as u64 * d.max_per_view as u64 * stride;
                     let counted = d.count_buffer.then_some((&d.counts, 4 * v as u64));
                     pass.draw_indexed_indirect(&d.commands, offset, counted, d.max_per_view);
