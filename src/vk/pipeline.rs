@@ -126,9 +126,8 @@ impl Pipeline {
         let entries: Vec<_> = (0..desc.vertex_constants.len() as u32)
             .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
             .collect();
-        let specialization = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(bytemuck::cast_slice(desc.vertex_constants));
+        let specialization =
+            vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(desc.vertex_constants));
         let stages = [
             vertex.stage(vk::ShaderStageFlags::VERTEX).specialization_info(&specialization),
             fragment.stage(vk::ShaderStageFlags::FRAGMENT),
