@@ -6,6 +6,7 @@ use sensorlight::clusters::cache;
 use sensorlight::gpu_types::GpuCluster;
 use sensorlight::light::groups::Lights;
 use sensorlight::passes::cull::{gpu_clusters, keeps};
+use sensorlight::passes::cull_triangles::may_cover;
 use sensorlight::sensors::SensorKind;
 use sensorlight::sensors::frame::{self, SensorFrame};
 use sensorlight::sensors::layout::SensorLayout;
@@ -33,18 +34,25 @@ fn main() -> anyhow::Result<()> {
     let near = frame::NEAR * scale;
     let batch = BatchViews::new(&frames, &layout, near, &bounds, rd);
     let start = std::time::Instant::now();
-    let (mut drawn, mut commands) = (0u64, 0u64);
+    let (mut drawn, mut commands, mut covering) = (0u64, 0u64, 0u64);
+    let corner = |i: u32| glam::Vec3::from(hierarchy.positions[hierarchy.indices[i as usize] as usize]);
     for (v, view) in batch.views.iter().enumerate() {
         let sensor = &batch.sensors[v / batch.per_sensor];
         for k in gpu.iter().filter(|k| keeps(k, view, sensor, rd, near)) {
             drawn += (k.index_count / 3) as u64;
             commands += 1;
+            let first = k.first_index;
+            covering += (first..first + k.index_count)
+                .step_by(3)
+                .filter(|&i| may_cover(view, rd, [corner(i), corner(i + 1), corner(i + 2)]))
+                .count() as u64;
         }
     }
     let full = mesh.triangles.len() as u64 * batch.views.len() as u64;
     println!(
         "{} triangles, {} clusters; {sensors} sensors × {} views at rd {rd}: full detail {:.0} triangles/sensor, \
-         culled+LOD {:.0} triangles/sensor in {:.1} draws/sensor ({:.2} %); twin {:.2} s",
+         culled+LOD {:.0} triangles/sensor in {:.1} draws/sensor ({:.2} %), of which {:.0} may cover a texel; \
+         twin {:.2} s",
         mesh.triangles.len(),
         gpu.len(),
         batch.per_sensor,
@@ -52,6 +60,7 @@ fn main() -> anyhow::Result<()> {
         drawn as f64 / sensors as f64,
         commands as f64 / sensors as f64,
         100.0 * drawn as f64 / full as f64,
+        covering as f64 / sensors as f64,
         start.elapsed().as_secs_f64()
     );
     Ok(())

@@ -1,7 +1,7 @@
 #version 460
 // Cluster culling (docs/DESIGN.md §9): for every sensor view of a batch, walk the clusters' bounding tree
 // (clusters::tree) down from its root, one depth per dispatch, and append a draw of each cluster the view
-// keeps to that view's indirect commands.
+// keeps to that view's indirect commands (and the command to the triangle pass's list).
 //
 // One invocation per (node, view) pair of depth `step`: step 0 takes the root for every view; later steps
 // take the pairs the step before queued. An inner node queues each child the view may keep something of;
@@ -20,7 +20,8 @@ layout(std430, set = 0, binding = 0) readonly buffer Clusters { GpuCluster clust
 layout(std430, set = 0, binding = 1) readonly buffer Views { GpuSensorView views[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Sensors { GpuSensor sensors[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Commands { GpuDrawCommand commands[]; };
-// counts[v]: the draws of view v; counts[views + v]: their triangles (statistics and tests).
+// counts[v]: the draws of view v; counts[views + v]: their triangles (statistics and tests); further
+// blocks of `views` for the triangle pass (passes::cull).
 layout(std430, set = 0, binding = 4) buffer Counts { uint counts[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Nodes { GpuCullNode nodes[]; };
 // The clusters of the leaves, leaf by leaf.
@@ -29,9 +30,19 @@ layout(std430, set = 0, binding = 6) readonly buffer Items { uint items[]; };
 layout(std430, set = 0, binding = 7) buffer Queue { uvec2 queue[]; };
 // Per depth: (pairs queued, workgroups to take them, 1, 1); yzw are a VkDispatchIndirectCommand.
 layout(std430, set = 0, binding = 8) buffer Walk { uvec4 walk[]; };
+// Every command written, for the triangle pass (cull_triangles.comp): (commands, workgroups, 1, 1), then
+// each command's index.
+layout(std430, set = 0, binding = 9) buffer Kept { uvec4 kept_dispatch; uint kept[]; };
+// Each view's command over its region of the triangle pass's pool: started here, filled by that pass.
+layout(std430, set = 0, binding = 10) writeonly buffer Regions { GpuDrawCommand regions[]; };
 layout(push_constant) uniform Push { CullPush push; };
 
 const uint GROUP = 64u;
+// The fewest workgroups a dispatch may count (maxComputeWorkGroupCount[0]): the triangle pass loops over
+// the rest.
+const uint MAX_WORKGROUPS = 65535u;
+// cull_triangles.comp's workgroup: a command per invocation.
+const uint TRIANGLE_GROUP = 64u;
 
 vec4 row(mat4 m, int i) {
     return vec4(m[0][i], m[1][i], m[2][i], m[3][i]);
@@ -109,6 +120,9 @@ void main() {
         if (v >= push.views) {
             return;
         }
+        if (push.region > 0u) {
+            regions[v] = GpuDrawCommand(0u, 1u, v * push.region, 0, v);
+        }
     } else {
         uint i = gl_GlobalInvocationID.x;
         if (i >= min(walk[push.step].x, push.in_capacity)) {
@@ -134,7 +148,11 @@ void main() {
                 uint slot = atomicAdd(counts[v], 1u);
                 atomicAdd(counts[push.views + v], k.index_count / 3u);
                 if (slot < push.max_per_view) {
-                    commands[v * push.max_per_view + slot] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
+                    uint command = v * push.max_per_view + slot;
+                    commands[command] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
+                    uint at = atomicAdd(kept_dispatch.x, 1u);
+                    kept[at] = command;
+                    atomicMax(kept_dispatch.y, min(at / TRIANGLE_GROUP + 1u, MAX_WORKGROUPS));
                 }
             }
         }

@@ -304,6 +304,7 @@ struct CullPush {
     uint out_base;
     uint out_capacity;
     uint in_capacity;
+    uint region;  // the triangle pass: indices in each view's region of the pool (0: no triangle pass)
     uint _pad;
 };
 #endif

@@ -261,6 +261,8 @@ pub struct MeshBenchConfig {
     pub repeat: usize,
     /// Full detail only up to this many triangles (it costs time in proportion to them).
     pub max_full_detail: usize,
+    /// Also time the clusters drawn whole ([`Detail::WholeClusters`]: no triangle pass).
+    pub whole_clusters: bool,
 }
 
 /// One scene at one sensor size and detail.
@@ -276,6 +278,10 @@ pub struct MeshMeasurement {
     pub ms_per_sensor: f64,
     /// Culled: triangles the maps drew per sensor, all its views.
     pub drawn_triangles_per_sensor: Option<f64>,
+    /// The last round's device time per sensor (timestamps, where the device writes them): the culling
+    /// and triangle passes, and the maps (the emitter pass included).
+    pub gpu_cull_ms_per_sensor: Option<f64>,
+    pub gpu_maps_ms_per_sensor: Option<f64>,
     /// Time per sensor against the first scene's at the same size and detail (full detail: the first
     /// scene's full detail; clusters: its full detail too, the image the others are held to).
     pub vs_first: f64,
@@ -308,15 +314,17 @@ pub fn run_meshes(
         let mut runs = Vec::new();
         for (name, scene) in &config.scenes {
             let triangles = scene.mesh.triangles.len();
-            for detail in [Detail::Full, Detail::Clusters] {
-                if detail == Detail::Full && triangles > config.max_full_detail {
+            for detail in [Detail::Full, Detail::WholeClusters, Detail::Clusters] {
+                if (detail == Detail::Full && triangles > config.max_full_detail)
+                    || (detail == Detail::WholeClusters && !config.whole_clusters)
+                {
                     continue;
                 }
                 let mut r = Renderer::builder(device, scene, sensor, rd)
                     .estimator(config.estimator_kind)
                     .detail(detail)
                     .build_unchecked(config.strategy)?;
-                if detail == Detail::Clusters && !r.culled() {
+                if detail != Detail::Full && !r.culled() {
                     continue; // the device cannot draw from clusters: nothing to compare
                 }
                 let pixels = probe_pixels(&r.gbuffer(config.size)?.surface, config.sensors);
@@ -334,8 +342,11 @@ pub fn run_meshes(
         }
         let per_sensor = |seconds: &[f64], n: usize| 1e3 * median(seconds) / n.max(1) as f64;
         let baseline = runs.first().map(|(_, _, _, _, p, _, s)| per_sensor(s, p.len())).unwrap_or(f64::NAN);
-        for (scene, triangles, detail, _, pixels, drawn, seconds) in runs {
+        for (scene, triangles, detail, r, pixels, drawn, seconds) in runs {
             let ms = per_sensor(&seconds, pixels.len());
+            let times = r.batch_times();
+            let device_ms =
+                |d: Option<std::time::Duration>| d.map(|d| 1e3 * d.as_secs_f64() / pixels.len().max(1) as f64);
             measurements.push(MeshMeasurement {
                 scene,
                 triangles,
@@ -345,6 +356,8 @@ pub fn run_meshes(
                 seconds,
                 ms_per_sensor: ms,
                 drawn_triangles_per_sensor: drawn,
+                gpu_cull_ms_per_sensor: device_ms(times.gpu_cull),
+                gpu_maps_ms_per_sensor: device_ms(times.gpu_maps),
                 vs_first: ms / baseline,
             });
         }

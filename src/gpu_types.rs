@@ -543,5 +543,8 @@ pub struct CullPush {
     pub out_base: u32,
     pub out_capacity: u32,
     pub in_capacity: u32,
+    /// The triangle pass (`passes::cull_triangles`): the indices in each view's region of the slot's pool
+    /// (0: no triangle pass).
+    pub region: u32,
     pub _pad: u32,
 }

@@ -11,7 +11,8 @@ use sensorlight::clusters;
 use sensorlight::clusters::CullTree;
 use sensorlight::gpu_scene::TreeShape;
 use sensorlight::gpu_types::{CullPush, GpuDrawCommand};
-use sensorlight::passes::cull::{CullBindings, CullPass, gpu_clusters, gpu_cull_nodes, keeps};
+use sensorlight::passes::cull::{COUNT_BLOCKS, CullBindings, CullPass, gpu_clusters, gpu_cull_nodes, keeps};
+use sensorlight::passes::cull_triangles::KEPT_HEADER_BYTES;
 use sensorlight::scene::Aabb;
 use sensorlight::sensors::SensorKind;
 use sensorlight::sensors::frame::SensorFrame;
@@ -61,7 +62,7 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
         let counts = Buffer::new(
             device,
             "draw counts",
-            views as u64 * 8,
+            4 * COUNT_BLOCKS * views as u64,
             out | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )
@@ -73,6 +74,11 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
         let walk_usage = out | vk::BufferUsageFlags::TRANSFER_DST;
         let walk = Buffer::new(device, "walk", shape.walk_bytes(), walk_usage, local).unwrap();
         let pass = CullPass::new(device, 1, shape.clone()).unwrap();
+        // The walk lists its commands for the triangle pass, which this test leaves out (`push.region` 0):
+        // it reads neither the clusters' triangles nor a pool.
+        let slots = (views * max_per_view as usize) as u64;
+        let kept = Buffer::new(device, "kept", KEPT_HEADER_BYTES + 4 * slots, walk_usage, local).unwrap();
+        let unused = Buffer::new(device, "unused", 64, storage, local).unwrap();
         let bindings = CullBindings {
             clusters: &clusters,
             nodes: &nodes,
@@ -83,6 +89,12 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
             counts: &counts,
             queue: &queue,
             walk: &walk,
+            kept: &kept,
+            vertices: &unused,
+            indices: &unused,
+            pool: &unused,
+            regions: &unused,
+            region_draws: &unused,
         };
         pass.bind(device, 0, &bindings);
         device
@@ -92,7 +104,7 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
                     &[sensorlight::vk::Access::TransferWrite],
                     &[sensorlight::vk::Access::ComputeRead],
                 );
-                pass.record(enc, 0, (&counts, &walk), None, &push);
+                pass.record(enc, 0, (&counts, &walk, &kept), None, &push);
                 Ok(())
             })
             .unwrap();

@@ -147,6 +147,7 @@ fn shared_structs_match_glsl() {
                 out_base,
                 out_capacity,
                 in_capacity,
+                region,
                 _pad
             ),
         ),

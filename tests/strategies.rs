@@ -64,7 +64,8 @@ fn agrees_with_per_sensor(kind: StrategyKind, sensor: SensorKind, estimator: Est
             .build();
         let groups = if estimator == EXACT { 1 } else { 0 }; // the lightbox has one light
         let fronts = if estimator == EXACT { EmitterFronts::Group } else { EmitterFronts::Emission };
-        let desc = StrategyDesc { layout: SensorLayout { kind: sensor, groups }, fronts, rd, budget: 1 << 24 };
+        let layout = SensorLayout { kind: sensor, groups };
+        let desc = StrategyDesc { layout, fronts, rd, budget: 1 << 24, cull_triangles: true };
         if let Some(why) = unsupported(kind, device, &desc) {
             let message = named.err().map(|e| e.to_string()).unwrap_or_default();
             assert!(message.contains("cannot run") && message.contains(&why), "{kind}: {message}");

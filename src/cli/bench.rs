@@ -27,6 +27,9 @@ pub struct BenchArgs {
     /// With --scenes: time full detail only on meshes of at most this many triangles
     #[arg(long, default_value_t = 2_000_000, requires = "scenes")]
     full_detail_max: usize,
+    /// With --scenes: also time the clusters drawn whole, without the triangle pass
+    #[arg(long, requires = "scenes")]
+    whole_clusters: bool,
     /// Sensor map sizes (rd), comma-separated
     #[arg(long, value_delimiter = ',', default_value = "32,64,128,256")]
     sizes: Vec<u32>,
@@ -144,6 +147,7 @@ fn run_meshes(args: &BenchArgs) -> Result<ExitCode> {
         sensors: args.sensors,
         repeat: args.repeat,
         max_full_detail: args.full_detail_max,
+        whole_clusters: args.whole_clusters,
     };
     super::with_device(args.device, |device| {
         let bar = super::counter::Counter::new((config.sizes.len() * config.repeat) as u64, "rounds");
@@ -165,17 +169,23 @@ fn run_meshes(args: &BenchArgs) -> Result<ExitCode> {
 fn print_mesh_report(r: &MeshReport) -> Result<()> {
     outln!("device: {} ({})", r.device, r.driver)?;
     outln!("{} sensors, strategy {}, {} timed runs each, interleaved; medians", r.sensor, r.strategy, r.repeat)?;
-    outln!("\n| rd | scene | triangles | detail | sensors | ms/sensor | triangles drawn/sensor | vs first (full) |")?;
-    outln!("|---:|---|---:|---|---:|---:|---:|---:|")?;
+    outln!(
+        "\n| rd | scene | triangles | detail | sensors | ms/sensor | device ms/sensor: culling, maps | triangles \
+         drawn/sensor | vs first (full) |"
+    )?;
+    outln!("|---:|---|---:|---|---:|---:|---|---:|---:|")?;
+    let ms = |t: Option<f64>| t.map_or_else(|| "–".into(), |t| format!("{t:.3}"));
     for m in &r.measurements {
         outln!(
-            "| {} | {} | {} | {:?} | {} | {:.3} | {} | {:.2}× |",
+            "| {} | {} | {} | {:?} | {} | {:.3} | {}, {} | {} | {:.2}× |",
             m.rd,
             m.scene,
             m.triangles,
             m.detail,
             m.sensors,
             m.ms_per_sensor,
+            ms(m.gpu_cull_ms_per_sensor),
+            ms(m.gpu_maps_ms_per_sensor),
             m.drawn_triangles_per_sensor.map(|t| format!("{t:.0}")).unwrap_or_else(|| "all".into()),
             m.vs_first
         )?;

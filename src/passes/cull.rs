@@ -18,7 +18,13 @@
 //! batch runner sizes `max_per_view` by `clusters::max_selected`, so that this cannot happen, and checks
 //! every count it reads back.
 //!
-//! After the `views` draw counts, the counts buffer holds each view's triangles drawn (statistics, tests).
+//! The counts buffer holds [`COUNT_BLOCKS`] blocks of `views` `u32`: each view's draws in its list, its
+//! triangles selected (statistics, tests), and for the triangle pass: its triangles drawn, the indices
+//! reserved in its region of the pool, its clusters left whole, and the walk's draws (the triangle pass
+//! zeroes the first block's count where it left no cluster whole, so that the list draws nothing).
+//!
+//! Then the triangle pass (`passes::cull_triangles`) takes every command the walk wrote, listed in the
+//! `kept` buffer, and drops the triangles that cannot cover a texel of their view.
 
 use std::sync::Arc;
 
@@ -26,6 +32,7 @@ use anyhow::Result;
 use ash::vk;
 use glam::{Mat4, Vec3, Vec4, Vec4Swizzles as _};
 
+use super::cull_triangles::{CullTriangles, TriangleBindings};
 use crate::clusters;
 use crate::gpu_scene::{TreeShape, bounds_from_gpu};
 use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
@@ -33,6 +40,8 @@ use crate::shaders;
 use crate::vk::{Access, Buffer, ComputeKernel, Device, Encoder, barrier, compute::groups_for};
 
 const GROUP: u32 = 64;
+/// Blocks of per-view counts in the counts buffer.
+pub const COUNT_BLOCKS: u64 = 6;
 
 /// What one culling pass reads and writes.
 pub struct CullBindings<'a> {
@@ -44,17 +53,27 @@ pub struct CullBindings<'a> {
     pub sensors: &'a Buffer,
     /// `views × max_per_view` `GpuDrawCommand`s (usage: storage and indirect).
     pub commands: &'a Buffer,
-    /// Two `u32` per view: draws, then triangles (usage: storage, indirect and transfer destination: it is
-    /// cleared here).
+    /// [`COUNT_BLOCKS`] `u32` per view (usage: storage, indirect and transfer destination: it is cleared
+    /// here).
     pub counts: &'a Buffer,
     /// The walk's scratch: `TreeShape::queue_bytes` and `TreeShape::walk_bytes` (usage: storage; the walk
     /// also indirect and transfer destination).
     pub queue: &'a Buffer,
     pub walk: &'a Buffer,
+    /// The commands written, for the triangle pass ([`TriangleBindings::kept`]).
+    pub kept: &'a Buffer,
+    /// The clusters' vertices and indices and the slot's index pool, for the triangle pass.
+    pub vertices: &'a Buffer,
+    pub indices: &'a Buffer,
+    pub pool: &'a Buffer,
+    /// Each view's command over its region of the pool, started by the walk, and its count of them.
+    pub regions: &'a Buffer,
+    pub region_draws: &'a Buffer,
 }
 
 pub struct CullPass {
     kernel: ComputeKernel,
+    triangles: CullTriangles,
     tree: TreeShape,
 }
 
@@ -62,9 +81,9 @@ impl CullPass {
     /// `sets`: one per batch in flight.
     pub fn new(device: &Arc<Device>, sets: u32, tree: TreeShape) -> Result<Self> {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let bindings: Vec<_> = (0..9).map(|b| (b, storage)).collect();
+        let bindings: Vec<_> = (0..11).map(|b| (b, storage)).collect();
         let kernel = ComputeKernel::new(device, shaders::CULL_COMP, &bindings, size_of::<CullPush>() as u32, sets)?;
-        Ok(Self { kernel, tree })
+        Ok(Self { kernel, triangles: CullTriangles::new(device, sets)?, tree })
     }
 
     /// Binds set `set` (call while its work is not in flight).
@@ -80,22 +99,37 @@ impl CullPass {
             .storage_buffer(6, b.items)
             .storage_buffer(7, b.queue)
             .storage_buffer(8, b.walk)
+            .storage_buffer(9, b.kept)
+            .storage_buffer(10, b.regions)
             .apply(device);
+        let triangles = TriangleBindings {
+            views: b.views,
+            vertices: b.vertices,
+            indices: b.indices,
+            pool: b.pool,
+            commands: b.commands,
+            counts: b.counts,
+            kept: b.kept,
+            regions: b.regions,
+            region_draws: b.region_draws,
+        };
+        self.triangles.bind(device, set, &triangles);
     }
 
-    /// Records: clear the counts and the walk, walk the tree one depth per dispatch, and make the commands
-    /// and counts visible to indirect draws. `push` gives the batch's views and selection; the walk's own
+    /// Records: clear the counts and the walk, walk the tree one depth per dispatch, run the triangle pass
+    /// on the commands written (where `push.region` gives it room), and make the commands, counts
+    /// and indices visible to the draws. `push` gives the batch's views, selection and pool; the walk's own
     /// fields are filled in here. `zero_commands`: also clear every command first, for draws that read all
     /// `max_per_view` of a view (no `drawIndirectCount`): the unused ones then draw nothing.
     pub fn record(
         &self,
         enc: &Encoder<'_>,
         set: usize,
-        (counts, walk): (&Buffer, &Buffer),
+        (counts, walk, kept): (&Buffer, &Buffer, &Buffer),
         zero_commands: Option<&Buffer>,
         push: &CullPush,
     ) {
-        barrier::global(enc, &[Access::IndirectRead], &[Access::TransferWrite]);
+        barrier::global(enc, &[Access::IndirectRead, Access::IndexRead], &[Access::TransferWrite]);
         enc.fill(counts, 0);
         if let Some(commands) = zero_commands {
             enc.fill(commands, 0);
@@ -103,6 +137,7 @@ impl CullPass {
         let depths = self.tree.per_depth.len();
         let start: Vec<u32> = (0..depths).flat_map(|_| [0, 0, 1, 1]).collect();
         enc.update(walk, &start);
+        enc.update(kept, &[0, 0, 1, 1]);
         barrier::global(enc, &[Access::TransferWrite], &[Access::ComputeWrite]);
         // Where each depth's pairs start in the queue (depth 0, the root, is not queued).
         let capacity = |d: usize| push.views * self.tree.per_depth.get(d).copied().unwrap_or(0);
@@ -127,7 +162,12 @@ impl CullPass {
                 self.kernel.dispatch_indirect(enc, set, &push, (walk, 16 * step as u64 + 4));
             }
         }
-        barrier::global(enc, &[Access::ComputeWrite], &[Access::IndirectRead]);
+        if push.region > 0 {
+            barrier::global(enc, &[Access::ComputeWrite], &[Access::ComputeWrite, Access::IndirectRead]);
+            self.triangles.record(enc, set, kept, push);
+        }
+        let draws = [Access::IndirectRead, Access::IndexRead, Access::ComputeRead];
+        barrier::global(enc, &[Access::ComputeWrite], &draws);
     }
 }
 

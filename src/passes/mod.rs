@@ -3,6 +3,7 @@
 
 pub mod compose;
 pub mod cull;
+pub mod cull_triangles;
 pub mod emitters;
 pub mod fill;
 pub mod filter;

@@ -25,7 +25,7 @@ use crate::cancel::{Cancelled, Reason};
 use crate::gbuffer::GBufferData;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{CullPush, GpuSensor, GpuSensorResult, GpuZoom};
-use crate::passes::cull::{CullBindings, CullPass};
+use crate::passes::cull::{COUNT_BLOCKS, CullBindings, CullPass};
 use crate::passes::emitters::{EmitterBindings, EmitterPass};
 use crate::passes::reduce::{ReduceBindings, ReducePass};
 use crate::passes::sensor_maps::{self, CacheRead, CkParams, SlotMaps, Strategy, StrategyDesc};
@@ -56,8 +56,12 @@ pub struct BatchTimes {
     pub gpu_reduction: Option<Duration>,
     /// Bytes read back to the host (each batch's results).
     pub readback_bytes: u64,
-    /// Culled: the triangles the sensor maps drew, all views of all batches (`None` at full detail).
+    /// Culled: the triangles the sensor maps drew, all views of all batches (`None` at full detail), and
+    /// those of the clusters the culling pass selected (as many without the triangle pass).
     pub drawn_triangles: Option<u64>,
+    pub selected_triangles: Option<u64>,
+    /// Clusters the triangle pass left whole, their view's region of its pool being full (drawn, slower).
+    pub whole_clusters: u64,
 }
 
 /// What a render's reductions write, a `vec4` per pixel each (w: `gpu_types::radiance_state`): R, and its
@@ -207,6 +211,12 @@ impl BatchRunner {
                         counts: &draws.counts,
                         queue: &draws.queue,
                         walk: &draws.walk,
+                        kept: &draws.kept,
+                        vertices: &c.vertices,
+                        indices: &c.indices,
+                        pool: &draws.pool,
+                        regions: &draws.regions,
+                        region_draws: &draws.region_draws,
                     };
                     pass.bind(device, i, &bindings);
                 }
@@ -352,10 +362,11 @@ impl BatchRunner {
                         max_per_view: draws.max_per_view,
                         rd,
                         near,
+                        region: draws.region,
                         ..Default::default()
                     };
                     let zero = (!draws.count_buffer).then_some(&draws.commands);
-                    c.pass.record(enc, index, (&draws.counts, &draws.walk), zero, &push);
+                    c.pass.record(enc, index, (&draws.counts, &draws.walk, &draws.kept), zero, &push);
                 }
                 stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
                 // The emitters' closed form needs no map: it runs before the maps.
@@ -448,17 +459,28 @@ impl BatchRunner {
         }
         if let (Some(total), Some(draws)) = (&mut self.times.drawn_triangles, slot.maps.draws()) {
             let views = pixels.len() * self.desc.layout.views() as usize;
-            let counts: Vec<u32> = draws.counts.read(2 * views)?;
+            let counts: Vec<u32> = draws.counts.read(COUNT_BLOCKS as usize * views)?;
+            let block = |b: usize| &counts[b * views..(b + 1) * views];
+            let triangle_pass = draws.region > 0;
             // The slots are sized by a bound no selection exceeds; a view beyond it would have lost geometry.
-            if let Some(v) = counts[..views].iter().position(|&n| n > draws.max_per_view) {
+            let walked = block(if triangle_pass { 5 } else { 0 });
+            if let Some(v) = walked.iter().position(|&n| n > draws.max_per_view) {
                 anyhow::bail!(
                     "sensor view {v} selected {} clusters, more than the {} its draw list holds: a bug in the cluster \
                      bound or the culling pass; nothing was written",
-                    counts[v],
+                    walked[v],
                     draws.max_per_view
                 );
             }
-            *total += counts[views..].iter().map(|&n| n as u64).sum::<u64>();
+            let sum = |b: usize| block(b).iter().map(|&n| n as u64).sum::<u64>();
+            let selected = sum(1);
+            // Without the triangle pass the maps draw what the walk selected.
+            let drawn = if triangle_pass { sum(2) } else { selected };
+            *total += drawn;
+            *self.times.selected_triangles.get_or_insert(0) += selected;
+            if triangle_pass {
+                self.times.whole_clusters += sum(4);
+            }
         }
         deliver(&Sensed { pixels: &pixels, results: &r, texels: &texels });
         Ok(())

@@ -149,7 +149,9 @@ pub fn unsupported(
 ) -> Option<String> {
     let config = RendererConfig::fixed(estimator, sensor, rd, kind);
     let layout = config.layout(&Lights::new(&scene.mesh));
-    let desc = StrategyDesc { layout, fronts: fronts(estimator), rd, budget: config.batch_budget(device, &layout) };
+    let budget = config.batch_budget(device, &layout);
+    let cull_triangles = config.cull_triangles();
+    let desc = StrategyDesc { layout, fronts: fronts(estimator), rd, budget, cull_triangles };
     crate::passes::sensor_maps::unsupported(kind, device, &desc)
 }
 
@@ -230,13 +232,25 @@ impl Renderer {
                 let all = points.entries.len().max(1) as u64 * layout.layers() as u64 * (c.sensor_size as u64).pow(2);
                 let quarter = (budget / 4).min(all * TEXEL_BYTES);
                 budget -= quarter;
-                let desc = StrategyDesc { layout, fronts: EmitterFronts::Group, rd: c.sensor_size, budget: quarter };
+                let desc = StrategyDesc {
+                    layout,
+                    fronts: EmitterFronts::Group,
+                    rd: c.sensor_size,
+                    budget: quarter,
+                    cull_triangles: config.cull_triangles(),
+                };
                 let runner = BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?;
                 Some((points, runner.with_rows()?))
             }
             _ => None,
         };
-        let desc = StrategyDesc { layout, fronts: fronts(config.estimator), rd: config.sensor_size, budget };
+        let desc = StrategyDesc {
+            layout,
+            fronts: fronts(config.estimator),
+            rd: config.sensor_size,
+            budget,
+            cull_triangles: config.cull_triangles(),
+        };
         Ok(Self {
             host: scene.clone(),
             bvh,

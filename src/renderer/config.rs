@@ -32,6 +32,9 @@ pub enum Detail {
     Full,
     /// Clusters whatever the mesh's size, where the device can draw them.
     Clusters,
+    /// As `Clusters`, each cluster drawn whole: without the triangle pass (`passes::cull_triangles`), as the
+    /// maps were drawn before it; for benchmarks and the tests that hold the two alike.
+    WholeClusters,
 }
 
 impl Detail {
@@ -39,7 +42,7 @@ impl Detail {
         match self {
             Detail::Auto => triangles >= CLUSTER_MIN_TRIANGLES,
             Detail::Full => false,
-            Detail::Clusters => triangles > 0,
+            Detail::Clusters | Detail::WholeClusters => triangles > 0,
         }
     }
 }
@@ -95,6 +98,11 @@ impl CacheConfig {
 }
 
 impl RendererConfig {
+    /// Whether maps drawn from clusters run the triangle pass (all but [`Detail::WholeClusters`]).
+    pub fn cull_triangles(&self) -> bool {
+        self.detail != Detail::WholeClusters
+    }
+
     /// A renderer for sensors of `sensor` kind and size `sensor_size` read by `estimator`: the `auto`
     /// strategy and level of detail, the default budget and batches in flight, no radiance cache.
     pub fn new(estimator: EstimatorKind, sensor: SensorKind, sensor_size: u32) -> Self {

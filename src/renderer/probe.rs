@@ -61,8 +61,13 @@ impl Prober for ProbeRenderer<'_> {
             EstimatorKind::Paper => 0,
         };
         let layout = SensorLayout { kind: self.config.sensor, groups };
-        let desc =
-            StrategyDesc { layout, fronts: super::build::fronts(self.config.estimator), rd, budget: self.budget };
+        let desc = StrategyDesc {
+            layout,
+            fronts: super::build::fronts(self.config.estimator),
+            rd,
+            budget: self.budget,
+            cull_triangles: self.config.cull_triangles(),
+        };
         sensor_maps::unsupported(kind, self.device, &desc)
     }
 

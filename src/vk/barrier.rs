@@ -25,6 +25,8 @@ pub enum Access {
     DepthAttachment,
     /// Indirect draw or dispatch arguments.
     IndirectRead,
+    /// Index buffers read by indexed draws.
+    IndexRead,
     TransferRead,
     TransferWrite,
     HostRead,
@@ -48,6 +50,7 @@ impl Access {
             Self::ColorAttachmentWrite => S::COLOR_ATTACHMENT_OUTPUT,
             Self::DepthAttachment => S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
             Self::IndirectRead => S::DRAW_INDIRECT,
+            Self::IndexRead => S::VERTEX_INPUT,
             Self::TransferRead | Self::TransferWrite | Self::Acquired => S::TRANSFER,
             Self::HostRead | Self::HostWrite => S::HOST,
             Self::Present => S::BOTTOM_OF_PIPE,
@@ -64,6 +67,7 @@ impl Access {
             Self::ColorAttachmentWrite => A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,
             Self::DepthAttachment => A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
             Self::IndirectRead => A::INDIRECT_COMMAND_READ,
+            Self::IndexRead => A::INDEX_READ,
             Self::TransferRead => A::TRANSFER_READ,
             Self::TransferWrite => A::TRANSFER_WRITE,
             Self::HostRead => A::HOST_READ,

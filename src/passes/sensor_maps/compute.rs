@@ -54,7 +54,8 @@ pub struct Compute {
 
 impl Compute {
     pub fn new(device: &Arc<Device>, scene: &GpuScene, desc: StrategyDesc) -> Result<Self> {
-        let inputs = SensorInputs::new(device, scene, &desc, true);
+        // Its shader reads each view's cluster list only, not the triangle pass's regions.
+        let inputs = SensorInputs::new(device, scene, &StrategyDesc { cull_triangles: false, ..desc }, true);
         let stage = vk::ShaderStageFlags::COMPUTE;
         let bindings: Vec<_> = (0..BINDINGS)
             .map(|b| {

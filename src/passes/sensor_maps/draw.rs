@@ -3,13 +3,40 @@
 
 #[allow(clippy::wildcard_imports)]
 use super::*;
+use crate::passes::cull::COUNT_BLOCKS;
+use crate::passes::cull_triangles::KEPT_HEADER_BYTES;
+
+/// Triangles a view's region of the triangle pass's pool holds per texel of the view: a triangle drawn
+/// covers a texel centre, more than one a texel where several lie behind one another, as the far side of
+/// any closed mesh does (back faces are drawn: `tests/culling.rs`'s ball needs more than one). A sensor in
+/// the 0.55M hall drew 0.25 a texel (docs/BENCHMARKS.md). Beyond it, clusters are drawn whole.
+pub const REGION_PER_TEXEL: u32 = 2;
+
+/// Indices in a view's region of the triangle pass's pool (0: no triangle pass), before one storage
+/// buffer's range caps it.
+fn region(culled: &Culled) -> u32 {
+    let texels = culled.rd * culled.rd;
+    if culled.cull_triangles { 3 * REGION_PER_TEXEL * texels } else { 0 }
+}
+
+/// Bytes per sensor of what draws the maps from clusters.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawBytes {
+    /// Its draw lists and the culling walk's queue, and the triangle pass's pool: storage buffers, whose
+    /// range bounds a batch.
+    pub lists: u64,
+    pub pool: u64,
+    /// All of it: the lists, the triangle pass's list, pool and regions.
+    pub memory: u64,
+}
 
 /// One batch's indexed indirect draws: `max_per_view` command slots per view, and per view its number of
-/// draws and (after them, for statistics) of triangles, both written by the culling pass.
+/// draws and (after them, for statistics) of triangles, written by the culling and triangle passes.
 pub struct DrawLists {
     /// `GpuDrawCommand`s, view-major (device-local).
     pub commands: Buffer,
-    /// Two `u32` per view of the largest batch (host-readable: the runner checks them for overflow).
+    /// `passes::cull::COUNT_BLOCKS` `u32` per view of the largest batch (host-readable: the runner checks
+    /// the walk's draws for overflow and sums the triangles).
     pub counts: Buffer,
     pub max_per_view: u32,
     /// The device reads each view's count (`drawIndirectCount`); else every slot is drawn, the unused
@@ -18,23 +45,51 @@ pub struct DrawLists {
     /// The culling pass's walk: its queue of (node, view) pairs and its per-depth counts (device-local).
     pub queue: Buffer,
     pub walk: Buffer,
+    /// The commands the walk wrote, for the triangle pass (`passes::cull_triangles`; device-local).
+    pub kept: Buffer,
+    /// The triangle pass's index pool, `region` indices per view (0: no triangle pass), each view's
+    /// command over its region, and how many of it to draw (1, or 0 where empty).
+    pub pool: Buffer,
+    pub region: u32,
+    pub regions: Buffer,
+    pub region_draws: Buffer,
 }
 
 impl DrawLists {
+    /// Lists for `views` views: each view's region of the triangle pass's pool has room for
+    /// [`REGION_PER_TEXEL`] triangles per texel, within one storage buffer's range; a cluster beyond its
+    /// view's region is drawn whole.
     pub(super) fn new(device: &Arc<Device>, views: u32, culled: &Culled) -> Result<Self> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::INDIRECT_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST;
-        let bytes = views as u64 * culled.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64;
+        let slots = views as u64 * culled.max_per_view as u64;
+        let bytes = slots * size_of::<GpuDrawCommand>() as u64;
         let (storage, local) = (vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly);
         let queue = culled.tree.queue_bytes(views as u64);
+        let range = device.adapter.limits.max_storage_buffer_range as u64;
+        let region = (region(culled) as u64).min(range / 4 / views.max(1) as u64) as u32;
+        let region = if region >= 3 { region } else { 0 };
+        let pool_bytes = (4 * region as u64 * views as u64).max(4);
+        let pool_usage = vk::BufferUsageFlags::INDEX_BUFFER | storage;
         Ok(Self {
             commands: Buffer::new(device, "sensor draw lists", bytes, usage, local)?,
-            counts: Buffer::new(device, "sensor draw counts", 8 * views as u64, usage, MemoryLocation::GpuToCpu)?,
+            counts: Buffer::new(
+                device,
+                "sensor draw counts",
+                4 * COUNT_BLOCKS * views as u64,
+                usage,
+                MemoryLocation::GpuToCpu,
+            )?,
             max_per_view: culled.max_per_view,
             count_buffer: culled.count_buffer,
             queue: Buffer::new(device, "culling queue", queue, storage, local)?,
             walk: Buffer::new(device, "culling walk", culled.tree.walk_bytes(), usage, local)?,
+            kept: Buffer::new(device, "culling kept", KEPT_HEADER_BYTES + 4 * slots, usage, local)?,
+            pool: Buffer::new(device, "sensor triangle pool", pool_bytes, pool_usage, local)?,
+            region,
+            regions: Buffer::new(device, "sensor draw regions", views as u64 * 20, usage, local)?,
+            region_draws: Buffer::new(device, "sensor region draws", views as u64 * 4, usage, local)?,
         })
     }
 }
@@ -48,6 +103,9 @@ pub(super) struct Culled {
     pub(super) max_per_view: u32,
     pub(super) count_buffer: bool,
     pub(super) tree: TreeShape,
+    /// Run the triangle pass (`StrategyDesc::cull_triangles`) for views of `rd × rd` texels.
+    pub(super) cull_triangles: bool,
+    pub(super) rd: u32,
 }
 
 /// What every strategy draws the maps from: the scene's vertices (or clusters), materials, radiance cache
@@ -91,6 +149,8 @@ impl SensorInputs {
                 max_per_view: c.max_per_view.max(1),
                 count_buffer: device.adapter.features.draw_indirect_count,
                 tree: c.tree.clone(),
+                cull_triangles: desc.cull_triangles,
+                rd: desc.rd,
             }),
             device: device.clone(),
         }
@@ -101,13 +161,13 @@ impl SensorInputs {
         SensorPush { exact: self.exact as u32, emission_scale: self.emission_scale, ..*push }
     }
 
-    /// Bytes of draw lists and culling queue per sensor of `desc` (0 at full detail), for the batch size.
-    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
-        let per_view = self
-            .culled
-            .as_ref()
-            .map_or(0, |c| c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
-        desc.layout.views() as u64 * per_view
+    /// Bytes per sensor of `desc` of what draws it from clusters (none at full detail), for the batch size.
+    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> DrawBytes {
+        let Some(c) = &self.culled else { return DrawBytes::default() };
+        let views = desc.layout.views() as u64;
+        let lists = views * (c.max_per_view as u64 * size_of::<GpuDrawCommand>() as u64 + c.tree.queue_bytes(1));
+        let pool = views * 4 * region(c) as u64;
+        DrawBytes { lists, pool, memory: lists + pool + views * (4 * c.max_per_view as u64 + 24) }
     }
 }
 
@@ -171,7 +231,7 @@ impl SensorPipeline {
         Ok(Self { pipeline, layout, render_pass, inputs })
     }
 
-    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> u64 {
+    pub(super) fn draw_bytes(&self, desc: &StrategyDesc) -> DrawBytes {
         self.inputs.draw_bytes(desc)
     }
 
@@ -211,7 +271,22 @@ impl SensorPipeline {
             Some(d) => {
                 let push = self.inputs.push(push);
                 let stride = size_of::<GpuDrawCommand>() as u64;
-                for v in first..first + count {
+                let views = first..first + count;
+                // The triangle pass's survivors, each view's region of the pool, then the clusters it left
+                // whole (none, mostly: each list's count is then 0, or without a count buffer its commands
+                // draw nothing), from the clusters' indices.
+                if d.region > 0 {
+                    pass.bind_indices(&d.pool);
+                    for v in views.clone() {
+                        pass.push(&self.layout, &SensorPush { first_view: v, ..push });
+                        // Counted where the lists are: lavapipe (Mesa 25.0) draws a plain indirect draw after a
+                        // counted one with the counted one's count.
+                        let counted = d.count_buffer.then_some((&d.region_draws, 4 * v as u64));
+                        pass.draw_indexed_indirect(&d.regions, v as u64 * stride, counted, 1);
+                    }
+                    pass.bind_indices(self.inputs.culled.as_ref().map(|c| &*c.indices).expect("drawn from clusters"));
+                }
+                for v in views {
                     pass.push(&self.layout, &SensorPush { first_view: v, ..push });
                     let offset = v as u64 * d.max_per_view as u64 * stride;
                     let counted = d.count_buffer.then_some((&d.counts, 4 * v as u64));

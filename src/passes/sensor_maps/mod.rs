@@ -27,7 +27,7 @@ mod layered;
 mod multiview;
 mod per_sensor;
 
-pub use draw::DrawLists;
+pub use draw::{DrawBytes, DrawLists};
 use draw::{SensorInputs, SensorPipeline};
 
 use std::sync::Arc;
@@ -186,6 +186,8 @@ pub struct StrategyDesc {
     pub rd: u32,
     /// Bytes for one batch's maps and depth.
     pub budget: u64,
+    /// Drawn from clusters: drop the triangles that cover no texel first (`passes::cull_triangles`).
+    pub cull_triangles: bool,
 }
 
 impl StrategyDesc {
@@ -198,12 +200,13 @@ impl StrategyDesc {
         self.fronts == EmitterFronts::Group
     }
 
-    /// Sensors one batch may hold: what the memory budget allows (maps, depth and `draw_bytes` of draw lists
-    /// per sensor), what one storage buffer of draw lists may hold, and what one reduction dispatch can
-    /// cover (at least one).
-    pub fn batch_limit(&self, device: &Device, draw_bytes: u64) -> Result<u32> {
+    /// Sensors one batch may hold: what the memory budget allows (maps, depth and what draws them from
+    /// clusters, per sensor), what one storage buffer of draw lists may hold, and what one reduction
+    /// dispatch can cover (at least one).
+    pub fn batch_limit(&self, device: &Device, draw: DrawBytes) -> Result<u32> {
         let maps = self.layers() as u64 * (self.rd as u64).pow(2) * TEXEL_BYTES;
-        let per_sensor = maps + draw_bytes;
+        let per_sensor = maps + draw.memory;
+        let draw_bytes = draw.lists.max(draw.pool);
         let limits = &device.adapter.limits;
         ensure!(
             per_sensor <= limits.max_memory_allocation_size && per_sensor <= device.adapter.device_local_bytes,

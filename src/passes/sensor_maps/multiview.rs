@@ -45,7 +45,7 @@ impl Multiview {
         ensure!(group_sensors >= 1, "maxMultiviewViewCount {} < {layers}", limits.max_multiview_view_count);
         let group_layers = group_sensors * layers;
         let groups = (limits.max_image_array_layers / group_layers)
-            .min(desc.batch_limit(device, 0)?.div_ceil(group_sensors))
+            .min(desc.batch_limit(device, super::DrawBytes::default())?.div_ceil(group_sensors))
             .max(1);
         let view_layers = desc.layout.view_layers();
         let per_layer: Vec<Vec<usize>> =
