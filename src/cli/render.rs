@@ -321,11 +321,18 @@ fn print_stats(s: &RenderStats, wall: Duration) {
 }
 
 fn print_details(s: &RenderStats) {
+    let culled = match (s.drawn_triangles_per_sensor, s.selected_triangles_per_sensor) {
+        (Some(drawn), Some(selected)) => format!(
+            "; {drawn:.0} triangles drawn a sensor of its clusters' {selected:.0}{}",
+            if s.whole_clusters > 0 { format!(", {} clusters drawn whole", s.whole_clusters) } else { String::new() }
+        ),
+        _ => String::new(),
+    };
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
     let read_back: u64 = s.readback_bytes_per_round.iter().sum();
     sensorlight::errln!(
         "{} sensors ({}, rd {}, {}) in {} batches of up to {}, {} in flight; per refinement round: {}; {} quads \
-         interpolated; {:.1} KiB read back",
+         interpolated; {:.1} KiB read back{culled}",
         s.sensors,
         s.sensor,
         s.sensor_size,

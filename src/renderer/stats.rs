@@ -41,9 +41,12 @@ pub struct RenderStats {
     pub batch_size: u32,
     pub batches: u64,
     /// Whether the sensor maps were drawn from the scene's clusters (docs/DESIGN.md §9), and then the
-    /// triangles they drew per sensor, all views together.
+    /// triangles they drew per sensor, all views together, those of the clusters selected (the triangle
+    /// pass drops the rest), and the clusters the triangle pass left whole for want of room.
     pub culled: bool,
     pub drawn_triangles_per_sensor: Option<f64>,
+    pub selected_triangles_per_sensor: Option<f64>,
+    pub whole_clusters: u64,
     pub in_flight: u32,
     /// Wall time of the whole render.
     pub total_seconds: f64,
@@ -173,6 +176,9 @@ impl RenderStats {
             culled: engine.culled,
             drawn_triangles_per_sensor: (engine.batches.drawn_triangles)
                 .map(|t| if sensors > 0 { t as f64 / sensors as f64 } else { 0.0 }),
+            selected_triangles_per_sensor: (engine.batches.selected_triangles)
+                .map(|t| if sensors > 0 { t as f64 / sensors as f64 } else { 0.0 }),
+            whole_clusters: engine.batches.whole_clusters,
             in_flight: engine.in_flight,
             total_seconds: total,
             build_seconds: engine.build.as_secs_f64(),
