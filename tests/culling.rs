@@ -156,7 +156,9 @@ fn the_maps_draw_the_triangles_the_cpu_twins_select() {
 
 /// The triangle pass leaves the maps as they are: it drops only triangles that cover no texel centre. It
 /// draws a view's survivors in another order than its clusters', so where two triangles meet a texel
-/// centre at the same depth the other may win: in the atlas, one pixel's R moved by 1e-3 (measured).
+/// centre at the same depth the other may win. Measured: `layered` and `single-cb` identical; the atlas,
+/// whose tiles lie at large window coordinates, 4 pixels of 1 024 moved by at most 1.0e-3 on Mesa 25,
+/// 8 by at most 4.9e-3 on Mesa 22.3.
 #[test]
 fn the_triangle_pass_leaves_r_as_whole_clusters_give_it() {
     let scene = ball_in_a_box((32, 32));
@@ -181,8 +183,8 @@ fn the_triangle_pass_leaves_r_as_whole_clusters_give_it() {
             eprintln!(
                 "{kind}: {b:.0} triangles a sensor against {a:.0} whole; R of {moved} pixels moved, at most by {worst:.2e}"
             );
-            assert!(worst < 2e-3, "{kind}: R moved by {worst:.2e} from the whole clusters'");
-            assert!(moved * 200 <= differences.len(), "{kind}: R moved in {moved} of {} pixels", differences.len());
+            assert!(worst < 1e-2, "{kind}: R moved by {worst:.2e} from the whole clusters'");
+            assert!(moved * 50 <= differences.len(), "{kind}: R moved in {moved} of {} pixels", differences.len());
         }
     });
 }
