@@ -282,6 +282,8 @@ pub struct MeshMeasurement {
     /// and triangle passes, and the maps (the emitter pass included).
     pub gpu_cull_ms_per_sensor: Option<f64>,
     pub gpu_maps_ms_per_sensor: Option<f64>,
+    /// Clusters the triangle pass left whole per sensor (their view's region of its pool full), last round.
+    pub whole_clusters_per_sensor: f64,
     /// Time per sensor against the first scene's at the same size and detail (full detail: the first
     /// scene's full detail; clusters: its full detail too, the image the others are held to).
     pub vs_first: f64,
@@ -358,6 +360,7 @@ pub fn run_meshes(
                 drawn_triangles_per_sensor: drawn,
                 gpu_cull_ms_per_sensor: device_ms(times.gpu_cull),
                 gpu_maps_ms_per_sensor: device_ms(times.gpu_maps),
+                whole_clusters_per_sensor: times.whole_clusters as f64 / pixels.len().max(1) as f64,
                 vs_first: ms / baseline,
             });
         }

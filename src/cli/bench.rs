@@ -186,7 +186,11 @@ fn print_mesh_report(r: &MeshReport) -> Result<()> {
             m.ms_per_sensor,
             ms(m.gpu_cull_ms_per_sensor),
             ms(m.gpu_maps_ms_per_sensor),
-            m.drawn_triangles_per_sensor.map(|t| format!("{t:.0}")).unwrap_or_else(|| "all".into()),
+            match (m.drawn_triangles_per_sensor, m.whole_clusters_per_sensor) {
+                (None, _) => "all".into(),
+                (Some(t), w) if w > 0.0 => format!("{t:.0} ({w:.2} clusters whole)"),
+                (Some(t), _) => format!("{t:.0}"),
+            },
             m.vs_first
         )?;
     }

@@ -6,17 +6,24 @@ use super::*;
 use crate::passes::cull::COUNT_BLOCKS;
 use crate::passes::cull_triangles::KEPT_HEADER_BYTES;
 
-/// Triangles a view's region of the triangle pass's pool holds per texel of the view: a triangle drawn
-/// covers a texel centre, more than one a texel where several lie behind one another, as the far side of
-/// any closed mesh does (back faces are drawn: `tests/culling.rs`'s ball needs more than one). A sensor in
-/// the 0.55M hall drew 0.25 a texel (docs/BENCHMARKS.md). Beyond it, clusters are drawn whole.
-pub const REGION_PER_TEXEL: u32 = 2;
+/// Triangles a view's region of the triangle pass's pool holds per texel of the view, within
+/// [`REGION_MIN`]..=[`REGION_MAX`]: a triangle drawn covers a texel centre, several a texel where they lie behind one
+/// another, as the far side of any closed mesh does (back faces are drawn). At rd 32 a sensor drew 0.25 a
+/// texel in the 0.55M hall and 2 in Crytek Sponza, whose views left 285 clusters a sensor whole at 2 a
+/// texel (docs/BENCHMARKS.md). Beyond it, clusters are drawn whole: slower, never wrong.
+pub const REGION_PER_TEXEL: u32 = 8;
+/// The fewest triangles a view's region holds: at rd 16 Sponza's views left 72 clusters a sensor whole at
+/// 8 a texel.
+pub const REGION_MIN: u32 = 4_096;
+/// The most triangles a view's region holds: at large rd the triangles a view draws are far fewer than its
+/// texels (0.07 a texel in the hall at rd 64), and the pool would bound the batch (one storage buffer).
+pub const REGION_MAX: u32 = 16_384;
 
 /// Indices in a view's region of the triangle pass's pool (0: no triangle pass), before one storage
 /// buffer's range caps it.
 fn region(culled: &Culled) -> u32 {
-    let texels = culled.rd * culled.rd;
-    if culled.cull_triangles { 3 * REGION_PER_TEXEL * texels } else { 0 }
+    let triangles = (REGION_PER_TEXEL * culled.rd * culled.rd).clamp(REGION_MIN, REGION_MAX);
+    if culled.cull_triangles { 3 * triangles } else { 0 }
 }
 
 /// Bytes per sensor of what draws the maps from clusters.
