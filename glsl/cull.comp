@@ -30,8 +30,8 @@ layout(std430, set = 0, binding = 6) readonly buffer Items { uint items[]; };
 layout(std430, set = 0, binding = 7) buffer Queue { uvec2 queue[]; };
 // Per depth: (pairs queued, workgroups to take them, 1, 1); yzw are a VkDispatchIndirectCommand.
 layout(std430, set = 0, binding = 8) buffer Walk { uvec4 walk[]; };
-// Every command written, for the triangle pass (cull_triangles.comp): (commands, workgroups, 1, 1), then
-// each command's index.
+// Every command written, for the triangle pass where it runs (push.region > 0; cull_triangles.comp):
+// (commands, workgroups, 1, 1), then each command's index.
 layout(std430, set = 0, binding = 9) buffer Kept { uvec4 kept_dispatch; uint kept[]; };
 // Each view's command over its region of the triangle pass's pool: started here, filled by that pass.
 layout(std430, set = 0, binding = 10) writeonly buffer Regions { GpuDrawCommand regions[]; };
@@ -150,9 +150,11 @@ void main() {
                 if (slot < push.max_per_view) {
                     uint command = v * push.max_per_view + slot;
                     commands[command] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
-                    uint at = atomicAdd(kept_dispatch.x, 1u);
-                    kept[at] = command;
-                    atomicMax(kept_dispatch.y, min(at / TRIANGLE_GROUP + 1u, MAX_WORKGROUPS));
+                    if (push.region > 0u) {
+                        uint at = atomicAdd(kept_dispatch.x, 1u);
+                        kept[at] = command;
+                        atomicMax(kept_dispatch.y, min(at / TRIANGLE_GROUP + 1u, MAX_WORKGROUPS));
+                    }
                 }
             }
         }

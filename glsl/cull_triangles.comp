@@ -100,11 +100,13 @@ void main() {
         uint v = command / push.max_per_view;
         GpuSensorView view = views[v];
         GpuDrawCommand draw = commands[command];
-        uint n = min(draw.index_count / 3u, 128u);  // clusters::build::MAX_TRIANGLES
+        uint n = draw.index_count / 3u;
+        // clusters::build::MAX_TRIANGLES, which `keep` has a bit for each of: a larger cluster stays whole.
+        bool testable = n <= 128u;
         // Which triangles stay, a bit each, and how many.
         uint keep[4] = uint[4](0u, 0u, 0u, 0u);
         uint survivors = 0u;
-        for (uint t = 0u; t < n; t++) {
+        for (uint t = 0u; testable && t < n; t++) {
             uint first = draw.first_index + 3u * t;
             vec3 p0 = vertices[indices[first]].xyz;
             vec3 p1 = vertices[indices[first + 1u]].xyz;
@@ -115,7 +117,7 @@ void main() {
             }
         }
         uint base = survivors == 0u ? 0u : atomicAdd(counts[3u * n_views + v], 3u * survivors);
-        bool fits = base + 3u * survivors <= push.region;
+        bool fits = testable && base + 3u * survivors <= push.region;
         if (fits) {
             uint at = v * push.region + base;
             for (uint t = 0u; t < n; t++) {
