@@ -165,10 +165,10 @@ fn gpu_culling_keeps_what_its_cpu_twin_keeps() {
     assert!(drawn > 0 && drawn * 10 < full, "the far sensor draws {drawn} of the sphere's {full} triangles");
 }
 
-/// A cluster's box bounds it against a view's planes far more tightly than its sphere where clusters are
-/// long strips (a fluted column's flanks), and never drops a cluster with a corner inside the view: on the
-/// test hall, sensors on its triangles draw at most 60 % of what the sphere alone kept (32 % measured; 37 %
-/// in the 0.55M-triangle hall).
+/// A cluster's box bounds it against a view's planes more tightly than its sphere, and never drops a
+/// cluster with a corner inside the view: on the test hall, sensors on its triangles draw at most 75 % of
+/// what the sphere alone kept (66 % measured). Far more where clusters are long strips: when each of a
+/// fluted column's flanks was clustered apart, 32 % (37 % in the 0.55M-triangle hall).
 #[test]
 fn a_clusters_box_culls_what_its_sphere_cannot_and_nothing_in_view() {
     use glam::Vec4Swizzles as _;
@@ -216,5 +216,5 @@ fn a_clusters_box_culls_what_its_sphere_cannot_and_nothing_in_view() {
         }
     }
     assert!(corners_inside > 1000, "{corners_inside} (cluster, view) pairs with a corner in view");
-    assert!(with_box * 10 <= sphere_only * 6, "the box keeps {with_box} triangles, the sphere {sphere_only}");
+    assert!(with_box * 4 <= sphere_only * 3, "the box keeps {with_box} triangles, the sphere {sphere_only}");
 }
