@@ -10,16 +10,13 @@
 //! a hall of columns). Within a part, each surface keeps its own vertices (welded within the surface): the
 //! full detail is the mesh, every triangle with its own surface.
 //!
-//! What is simplified is a part welded across surfaces that look alike (one material, the same texture
-//! mean, the same texture coordinates where it has them: [`Look`]). Where two such surfaces meet there is
-//! no seam, so a column's flutes fold into a plain shaft at coarser levels, where seams kept each groove's
-//! two flanks apart at every level. A coarser triangle takes the surface of its first corner, turned to the corner
-//! whose surface faces most as it does ([`Welded::unweld`]). Where the looks differ meshoptimizer sees a
-//! seam: it may shorten it, moving both sides' vertices alike, but never opens it. A part of one cluster
-//! keeps its surfaces apart (a box's faces).
+//! What is simplified is a part welded across surfaces that look alike (`weld.rs`), so a column's
+//! flutes fold into a plain shaft at coarser levels. Where the looks differ meshoptimizer sees a seam: it
+//! may shorten it, moving both sides' vertices alike, but never opens it. A part of one cluster keeps its
+//! surfaces apart (a box's faces).
 //!
 //! Where `clod_build` ends, its last clusters' error is measured against the full detail (it adds up each
-//! level's), and simpler levels follow with their open borders kept ([`Base::End`]).
+//! level's), and simpler levels follow with their open borders kept (`Base::End`).
 //!
 //! A part of one cluster, which `clusterlod` leaves as it is, gets simpler levels of its own
 //! (`Part::push_levels`). A part as a whole vanishes where it projects under a view's accepted error
@@ -29,6 +26,7 @@ use glam::Vec3;
 use meshopt::{ClodMesh, SimplifyOptions, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
 use rayon::prelude::*;
 
+use super::weld::{Look, PartTriangle, Welded};
 use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
 use crate::scene::surfaces::{FxBuild, weld};
 use crate::scene::{Aabb, Mesh, closest_on_triangle};
@@ -40,112 +38,8 @@ pub const MAX_TRIANGLES: usize = 128;
 /// A part's levels beyond `clod_build`'s have at most this fraction of the previous level's triangles
 /// (1 / ratio): by halves, a view at any distance finds a level near its accepted error.
 const LEVEL_RATIO: usize = 2;
-/// Surfaces that look alike are welded where their normals are less than this far apart (radians): a
-/// column's flanks meet at 117° at its ridges. Welded at any angle (a sheet's two sides too), Crytek
-/// Sponza's sensors read R 1.3 % off the full detail's, three times as far as with no welding.
-const WELD_ANGLE: f32 = 0.75 * std::f32::consts::PI;
 /// Pairs of (full-detail triangle, level triangle) at most whose distances measure a simpler level's error.
 const MEASURED_PAIRS: usize = 1 << 24;
-
-/// What a surface looks like to a sensor, apart from its shape: its material and its albedo's texture mean
-/// (bits). Surfaces that look alike are welded for simplifying.
-type Look = (usize, [u32; 3]);
-
-/// One triangle of a part: its corners, surface, and texture coordinates where the mesh has them.
-type PartTriangle<'a> = (&'a [Vec3; 3], u32, Option<&'a [glam::Vec2; 3]>);
-
-/// The part's corners welded across surfaces that look alike, for simplifying: `corners` index `positions`;
-/// each of them stands for the part's vertices `sides[i]` welded there (the first its first), each with its
-/// surface's normal at it (area-weighted, unit).
-struct Welded {
-    positions: Vec<[f32; 3]>,
-    sides: Vec<Vec<(u32, Vec3)>>,
-    corners: Vec<u32>,
-}
-
-impl Welded {
-    /// `triangles`' corners (`part_corners`: the part's own vertex of each) welded by look, position and
-    /// texture coordinates, where their surfaces' normals there are less than [`WELD_ANGLE`] apart.
-    fn new(triangles: &[PartTriangle], part_corners: &[u32], positions: &[[f32; 3]], look: &[Look]) -> Self {
-        let mut normals = vec![Vec3::ZERO; positions.len()];
-        for (&(v, _, _), own) in triangles.iter().zip(part_corners.chunks_exact(3)) {
-            let normal = (v[1] - v[0]).cross(v[2] - v[0]);
-            own.iter().for_each(|&o| normals[o as usize] += normal);
-        }
-        normals.iter_mut().for_each(|n| *n = n.normalize_or_zero());
-        // By (look, position bits, texture coordinate bits): the welded ids there, each facing its own way.
-        type Key = (Look, [u32; 3], [u32; 2]);
-        let mut ids: std::collections::HashMap<Key, Vec<u32>, FxBuild> = Default::default();
-        let mut welded_as = vec![u32::MAX; positions.len()];
-        let mut out = Welded { positions: Vec::new(), sides: Vec::new(), corners: Vec::new() };
-        for (&(v, s, uvs), own) in triangles.iter().zip(part_corners.chunks_exact(3)) {
-            for k in 0..3 {
-                let o = own[k] as usize;
-                if welded_as[o] == u32::MAX {
-                    let uv = uvs.map_or([0; 2], |uv| uv[k].to_array().map(|x| (x + 0.0).to_bits()));
-                    let key = (look[s as usize], v[k].to_array().map(|x| (x + 0.0).to_bits()), uv);
-                    let candidates = ids.entry(key).or_default();
-                    let close = |&&w: &&u32| out.sides[w as usize][0].1.dot(normals[o]) >= WELD_ANGLE.cos();
-                    welded_as[o] = match candidates.iter().find(close) {
-                        Some(&w) => w,
-                        None => {
-                            out.positions.push(positions[o]);
-                            out.sides.push(Vec::new());
-                            candidates.push(out.sides.len() as u32 - 1);
-                            out.sides.len() as u32 - 1
-                        }
-                    };
-                    out.sides[welded_as[o] as usize].push((own[k], normals[o]));
-                }
-                out.corners.push(welded_as[o]);
-            }
-        }
-        out
-    }
-
-    /// Simplified `indices` (welded ids) as the part's own vertices. A triangle takes the surface of its
-    /// first corner (the provoking vertex), so each is turned (its winding kept) to start at the corner
-    /// whose surface faces most as it does: a column's flutes simplified into one facet read the flank
-    /// that faces like the facet (each corner stands for its own vertex of that surface). Against its
-    /// oracle the hall's image came out 1.2 % dark with the first corner's first surface, 0.6 % with this.
-    fn unweld(&self, indices: &[u32]) -> Vec<u32> {
-        let mut out = Vec::with_capacity(indices.len());
-        for t in indices.chunks_exact(3) {
-            let p = |k: usize| Vec3::from(self.positions[t[k] as usize]);
-            let normal = (p(1) - p(0)).cross(p(2) - p(0));
-            let facing = |k: usize| self.sides[t[k] as usize].iter().map(move |&(own, n)| (k, own, n.dot(normal)));
-            let (first, own, _) = (0..3)
-                .flat_map(facing)
-                .fold((0, self.sides[t[0] as usize][0].0, f32::MIN), |best, c| if c.2 > best.2 { c } else { best });
-            out.push(own);
-            out.extend([1, 2].map(|k| self.sides[t[(first + k) % 3] as usize][0].0));
-        }
-        out
-    }
-
-    /// The full detail's `indices` (welded ids, triangles in any order and rotation) as the part's own
-    /// triangles, each with the surface it had: the corners `part_corners` that weld to the same triangle.
-    fn full_detail(&self, part_corners: &[u32]) -> impl FnMut(&[u32]) -> Vec<u32> {
-        let rotated = |t: [u32; 3], by: usize| [t[by], t[(by + 1) % 3], t[(by + 2) % 3]];
-        let lowest = |t: [u32; 3]| (0..3).min_by_key(|&k| t[k]).expect("three corners");
-        let mut own: std::collections::HashMap<[u32; 3], Vec<[u32; 3]>, FxBuild> = Default::default();
-        for (w, p) in self.corners.chunks_exact(3).zip(part_corners.chunks_exact(3)) {
-            let (w, p) = ([w[0], w[1], w[2]], [p[0], p[1], p[2]]);
-            let by = lowest(w);
-            own.entry(rotated(w, by)).or_default().push(rotated(p, by));
-        }
-        move |indices| {
-            let mut out = Vec::with_capacity(indices.len());
-            for t in indices.chunks_exact(3) {
-                let t = [t[0], t[1], t[2]];
-                let by = lowest(t);
-                let p = own.get_mut(&rotated(t, by)).and_then(Vec::pop).expect("a full-detail triangle of the part");
-                out.extend_from_slice(&rotated(p, (3 - by) % 3));
-            }
-            out
-        }
-    }
-}
 
 /// What [`Part::simpler_levels`] simplifies.
 #[derive(Clone, Copy)]
@@ -506,29 +400,5 @@ impl Part {
             _pad: [0; 2],
         });
         self.indices.extend_from_slice(indices);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two triangles of one look sharing the edge from (0, 0, 0) to (0, 0, 1), the second folded about it
-    /// by `angle` (radians, between their normals): the welded corners.
-    fn welded_corners(angle: f32) -> Vec<u32> {
-        let a = [Vec3::ZERO, Vec3::Z, Vec3::X];
-        let b = [Vec3::Z, Vec3::ZERO, Vec3::new(-angle.cos(), angle.sin(), 0.0)];
-        let triangles: Vec<PartTriangle> = vec![(&a, 1, None), (&b, 2, None)];
-        let positions: Vec<[f32; 3]> = a.iter().chain(&b).map(|p| p.to_array()).collect();
-        let look = vec![(0, [0; 3]); 3];
-        Welded::new(&triangles, &[0, 1, 2, 3, 4, 5], &positions, &look).corners
-    }
-
-    #[test]
-    fn surfaces_of_one_look_weld_unless_they_face_apart() {
-        // A column's flanks at a ridge, 117° apart: the shared edge's corners weld.
-        assert_eq!(welded_corners(117f32.to_radians()), [0, 1, 2, 1, 0, 3]);
-        // A fold sharper than WELD_ANGLE (a blade's two faces): each keeps its own corners.
-        assert_eq!(welded_corners(160f32.to_radians()), [0, 1, 2, 3, 4, 5]);
     }
 }

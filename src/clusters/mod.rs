@@ -19,6 +19,7 @@ pub mod build;
 pub mod cache;
 pub mod select;
 pub mod tree;
+mod weld;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
