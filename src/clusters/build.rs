@@ -182,14 +182,13 @@ fn part_clusters(triangles: &[PartTriangle], surface: u32, lod: PartLod, look: &
         PartLod::Levels => {
             // Each surface its own look: boxes welded across their faces simplified into smaller shapes,
             // and the hall's pedestals and column bases darkened its image by 0.4 %.
-            let apart: Vec<Look> = (0..look.len()).map(|s| (s, [0; 3])).collect();
-            let welded = Welded::new(triangles, &corners, &part.positions, &apart);
+            let welded = Welded::new(triangles, &corners, &part.positions, |s| (s as usize, [0; 3]));
             part.push_levels(&corners, &welded);
             return part;
         }
         PartLod::Hierarchy => {}
     }
-    let welded = Welded::new(triangles, &corners, &part.positions, look);
+    let welded = Welded::new(triangles, &corners, &part.positions, |s| look[s as usize]);
     let mut full_detail = welded.full_detail(&corners);
     let config = meshopt::ClodConfig {
         simplify_permissive: false,
@@ -243,7 +242,7 @@ fn part_clusters(triangles: &[PartTriangle], surface: u32, lod: PartLod, look: &
         let (depth, indices) = if refined < 0 { (0, full_detail(&indices)) } else { (depth, welded.unweld(&indices)) };
         part.push(&indices, depth, own, parent);
     }
-    part.push_chain(&welded, &chain, end_depth + 1);
+    part.push_chain(&chain, end_depth + 1);
     part
 }
 
@@ -311,12 +310,13 @@ impl Part {
         let chain = self.simpler_levels(welded, Base::FullDetail(&welded.corners), &self.corners(corners));
         let parent = self.level_bounds()(chain.first());
         self.push(corners, 0, ErrorBounds::default(), parent);
-        self.push_chain(welded, &chain, 1);
+        self.push_chain(&chain, 1);
     }
 
     /// Levels simpler than `base` (`full`: the part's full detail), each from simplifying `base` to half
     /// the previous level's triangles and one cluster at most, until a level no longer simplifies by a
-    /// quarter: welded corners and error each. Regular simplification, so a closed part stays closed.
+    /// quarter: each as the part's own vertices ([`Welded::unweld`]), and its error. Regular simplification,
+    /// so a closed part stays closed.
     ///
     /// A level's error is the distance measured between it and the full detail, sampled both ways
     /// ([`MEASURED_PAIRS`] bounds the work, beyond which it is the end's error plus the distance to the
@@ -336,10 +336,9 @@ impl Part {
         }
         let bytes = typed_to_bytes(&welded.positions);
         let vertices = VertexDataAdapter::new(bytes, 12, 0).expect("positions are 12-byte vertices");
-        let corners = |indices: &[u32]| self.corners(&welded.unweld(indices));
         let (reference, offset) = match full.len() * MAX_TRIANGLES <= MEASURED_PAIRS {
-            true => (full.to_vec(), 0.0),
-            false => (corners(indices), base_error),
+            true => (std::borrow::Cow::Borrowed(full), 0.0),
+            false => (self.corners(&welded.unweld(indices)).into(), base_error),
         };
         let mut levels: Vec<(Vec<u32>, f32)> = Vec::new();
         let (mut previous, mut previous_error) = (indices.len() / 3, base_error);
@@ -355,7 +354,8 @@ impl Part {
                 break;
             }
             let estimate = if matches!(base, Base::FullDetail(_)) { estimate } else { 0.0 };
-            let level = corners(&simpler);
+            let simpler = welded.unweld(&simpler);
+            let level = self.corners(&simpler);
             let measured = offset + hausdorff(&reference, &level).max(hausdorff(&level, &reference));
             let error = measured.max(estimate).max(previous_error).max(f32::MIN_POSITIVE);
             levels.push((simpler, error));
@@ -371,10 +371,10 @@ impl Part {
     }
 
     /// The levels of [`Part::simpler_levels`] as clusters from `depth` on, each replaced by the next.
-    fn push_chain(&mut self, welded: &Welded, chain: &[(Vec<u32>, f32)], depth: u32) {
+    fn push_chain(&mut self, chain: &[(Vec<u32>, f32)], depth: u32) {
         let bounds = self.level_bounds();
         for (k, (indices, _)) in chain.iter().enumerate() {
-            self.push(&welded.unweld(indices), depth + k as u32, bounds(chain.get(k)), bounds(chain.get(k + 1)));
+            self.push(indices, depth + k as u32, bounds(chain.get(k)), bounds(chain.get(k + 1)));
         }
     }
 

@@ -30,9 +30,15 @@ pub struct Welded {
 }
 
 impl Welded {
-    /// `triangles`' corners (`part_corners`: the part's own vertex of each) welded by look, position and
-    /// texture coordinates, where their surfaces' normals there are less than [`WELD_ANGLE`] apart.
-    pub fn new(triangles: &[PartTriangle], part_corners: &[u32], positions: &[[f32; 3]], look: &[Look]) -> Self {
+    /// `triangles`' corners (`part_corners`: the part's own vertex of each) welded by `look` (of a surface),
+    /// position and texture coordinates, where their surfaces' normals there are less than [`WELD_ANGLE`]
+    /// apart.
+    pub fn new(
+        triangles: &[PartTriangle],
+        part_corners: &[u32],
+        positions: &[[f32; 3]],
+        look: impl Fn(u32) -> Look,
+    ) -> Self {
         let mut normals = vec![Vec3::ZERO; positions.len()];
         for (&(v, _, _), own) in triangles.iter().zip(part_corners.chunks_exact(3)) {
             let normal = (v[1] - v[0]).cross(v[2] - v[0]);
@@ -49,7 +55,7 @@ impl Welded {
                 let o = own[k] as usize;
                 if welded_as[o] == u32::MAX {
                     let uv = uvs.map_or([0; 2], |uv| uv[k].to_array().map(|x| (x + 0.0).to_bits()));
-                    let key = (look[s as usize], v[k].to_array().map(|x| (x + 0.0).to_bits()), uv);
+                    let key = (look(s), v[k].to_array().map(|x| (x + 0.0).to_bits()), uv);
                     let candidates = ids.entry(key).or_default();
                     let close = |&&w: &&u32| out.sides[w as usize][0].1.dot(normals[o]) >= WELD_ANGLE.cos();
                     welded_as[o] = match candidates.iter().find(close) {
@@ -124,8 +130,7 @@ mod tests {
         let b = [Vec3::Z, Vec3::ZERO, Vec3::new(-angle.cos(), angle.sin(), 0.0)];
         let triangles: Vec<PartTriangle> = vec![(&a, 1, None), (&b, 2, None)];
         let positions: Vec<[f32; 3]> = a.iter().chain(&b).map(|p| p.to_array()).collect();
-        let look = vec![(0, [0; 3]); 3];
-        Welded::new(&triangles, &[0, 1, 2, 3, 4, 5], &positions, &look).corners
+        Welded::new(&triangles, &[0, 1, 2, 3, 4, 5], &positions, |_| (0, [0; 3])).corners
     }
 
     #[test]
