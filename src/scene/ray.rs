@@ -21,12 +21,14 @@ impl Ray {
     }
 }
 
-/// Per-ray constants of the watertight test: the axis permutation and shear that map the ray onto +z.
+/// Per-ray constants of the watertight test: the axis permutation and shear that map the ray onto +z, as
+/// the three rows that take a point relative to the origin to the sheared frame (`x = p[kx] − sx·p[kz]`,
+/// `y = p[ky] − sy·p[kz]`, `z = sz·p[kz]`). A row has a 1 (or `sz`) and `−s` on two axes and 0 on the third,
+/// so its dot product rounds exactly as the formula does, without indexing a vector by a per-ray axis.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
     pub origin: Vec3,
-    k: [usize; 3],
-    shear: Vec3,
+    rows: [Vec3; 3],
 }
 
 impl RayShear {
@@ -38,21 +40,26 @@ impl RayShear {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky); // keep the winding
         }
-        let shear = Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-        Self { origin: ray.origin, k: [kx, ky, kz], shear }
+        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+        let axis = |k: usize, value: f32| {
+            let mut row = Vec3::ZERO;
+            row[k] = value;
+            row
+        };
+        let rows = [axis(kx, 1.0) + axis(kz, -sx), axis(ky, 1.0) + axis(kz, -sy), axis(kz, sz)];
+        Self { origin: ray.origin, rows }
     }
 
     /// Distance along the ray to the triangle if hit within `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, v: &[Vec3; 3], t_max: f32) -> Option<f32> {
-        let [kx, ky, kz] = self.k;
-        let s = self.shear;
+        let [rx, ry, rz] = self.rows;
         let a = v[0] - self.origin;
         let b = v[1] - self.origin;
         let c = v[2] - self.origin;
-        let (ax, ay) = (a[kx] - s.x * a[kz], a[ky] - s.y * a[kz]);
-        let (bx, by) = (b[kx] - s.x * b[kz], b[ky] - s.y * b[kz]);
-        let (cx, cy) = (c[kx] - s.x * c[kz], c[ky] - s.y * c[kz]);
+        let (ax, ay) = (a.dot(rx), a.dot(ry));
+        let (bx, by) = (b.dot(rx), b.dot(ry));
+        let (cx, cy) = (c.dot(rx), c.dot(ry));
         let mut u = cx * by - cy * bx;
         let mut w_v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -69,7 +76,7 @@ impl RayShear {
         if det == 0.0 {
             return None;
         }
-        let (az, bz, cz) = (s.z * a[kz], s.z * b[kz], s.z * c[kz]);
+        let (az, bz, cz) = (a.dot(rz), b.dot(rz), c.dot(rz));
         let t_scaled = u * az + w_v * bz + w * cz;
         let t = t_scaled / det;
         (t > 0.0 && t < t_max).then_some(t)
