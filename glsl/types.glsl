@@ -143,7 +143,7 @@ struct GpuCacheSplit {
 
 const uint CACHE_SPLIT = 0x80000000u;
 // Split nodes a lookup walks at most (src/gpu_types.rs CACHE_SPLIT_DEPTH: at least the deepest tree's).
-const uint CACHE_SPLIT_DEPTH = 8u;
+const uint CACHE_SPLIT_DEPTH = 12u;
 
 struct ReducePush {
     uint rd;             // sensor map side

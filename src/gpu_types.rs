@@ -303,7 +303,7 @@ pub const CACHE_ENTRY_BITS: u32 = 11;
 /// Split nodes a cache lookup walks at most (`glsl/types.glsl` `CACHE_SPLIT_DEPTH`, `glsl/cache.glsl`): at
 /// least the deepest split tree `gi::entries` builds, which it asserts. A walk cut short returned a split
 /// node's index as an entry's: a fragment then read another piece's light.
-pub const CACHE_SPLIT_DEPTH: u32 = 8;
+pub const CACHE_SPLIT_DEPTH: u32 = 12;
 /// A texel that sees no surface in the transport pass's texel list (`glsl/types.glsl` `TRANSPORT_NONE`).
 pub const TRANSPORT_NONE: u32 = u32::MAX;
 

@@ -117,3 +117,42 @@ fn the_transports_products_equal_sensing_the_bounces_again() {
     // The maps hold each bounce's addition in half floats (3 significant digits).
     assert!(rmse < 2e-3 && bias.abs() < 1e-3, "relative RMSE {rmse:.2e}, bias {bias:+.2e}");
 }
+
+/// Where a sphere rests on a pedestal, the cache's piece of its underside around the contact is halved
+/// where its points' openness differs (`gi::entries::OPENNESS_VARIATION`), so that a point just above the
+/// contact reads an entry sensed near it: the crevice is dark, and the entry of the whole piece, sensed a
+/// hand's width up, was read there many times too bright (most of the hall's whole-image error against the
+/// path tracer, docs/ACCURACY.md "A real interior"). Without the halving the same point reads that entry.
+#[test]
+fn a_contacts_crevice_reads_an_entry_sensed_near_it() {
+    use sensorlight::gi::RadianceCache;
+    use sensorlight::gi::entries::{Variation, openness_varies};
+    use sensorlight::scene::bvh::Bvh;
+
+    let scene = hall(4, 24, SIZE);
+    let mesh = &scene.mesh;
+    let bvh = Bvh::of_mesh(mesh);
+    let lift = sensorlight::sensors::frame::offsets(mesh.scale()).0;
+    let openness = |points: &[Vec3], normals: &[Vec3], _: Vec3| Variation {
+        direct: false,
+        openness: [1.0, -1.0].into_iter().any(|side| openness_varies(&bvh, (points, normals), side, lift)),
+    };
+    // The sphere's triangle nearest the contact (the sphere at x = 1.5 touches its pedestal at y = 0.9),
+    // facing down, and a point on it 2 cm above the pedestal.
+    let contact = Vec3::new(1.5, 0.9, 0.0);
+    let centroid = |i: usize| mesh.triangles[i].v.iter().sum::<Vec3>() / 3.0;
+    let nearest = (0..mesh.triangles.len())
+        .filter(|&i| mesh.triangles[i].normal.y < -0.5 && centroid(i).y > 0.905)
+        .min_by(|&a, &b| centroid(a).distance(contact).total_cmp(&centroid(b).distance(contact)))
+        .unwrap();
+    let (p, surface) = (centroid(nearest), mesh.triangles[nearest].surface);
+    assert!(p.y - contact.y < 0.03, "a point {} above the contact", p.y - contact.y);
+    let sensed_at = |cache: &RadianceCache| {
+        let entry = &cache.entries[cache.lookup(p, surface, true)];
+        (entry.point.distance(p), entry.area)
+    };
+    let (near, area) = sensed_at(&RadianceCache::build(mesh, 16, &[], Some(&openness)));
+    let (far, whole) = sensed_at(&RadianceCache::build(mesh, 16, &[], None));
+    assert!(near < 0.1, "the entry read 2 cm above the contact is sensed {near} m from it");
+    assert!(far > 2.0 * near && whole > 4.0 * area, "without the halving: {far} m away, area {whole} against {area}");
+}

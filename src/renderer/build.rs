@@ -14,7 +14,7 @@ use super::config::{CacheConfig, DEFAULT_IN_FLIGHT, Detail, RendererConfig, defa
 use super::estimate::Estimate;
 use super::{PostPasses, Renderer, detail, probe};
 use crate::gi::RadianceCache;
-use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION};
+use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION, Variation, openness_varies};
 use crate::gpu_scene::GpuScene;
 use crate::light::groups::{Lights, luminance};
 use crate::params::EstimatorKind;
@@ -203,18 +203,20 @@ impl Renderer {
             // The lights' irradiance in closed form where it is cheap (as for the exact interpolation).
             let few = estimate.few_emitters;
             let irradiance = |p: Vec3, n: Vec3| lights.unoccluded(p + n * bias, n).iter().map(|&e| luminance(e)).sum();
-            let varies = |points: &[Vec3], n: Vec3| {
+            let direct = |points: &[Vec3], n: Vec3| {
                 let Some(hinted) = &light_points else { return false };
-                [n, -n].iter().any(|&n| {
-                    let seen = points.iter().map(|&p| hints::mask(&bvh, hinted, (p, n), bias, near).count_ones());
-                    let (lo, hi) = seen.fold((u32::MAX, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
-                    (hi - lo) as f32 > LIGHT_VARIATION * hinted.len() as f32
-                        || few && {
-                            let e = points.iter().map(|&p| irradiance(p, n));
-                            let (dim, bright) = e.fold((f32::MAX, 0.0f32), |(lo, hi), e: f32| (lo.min(e), hi.max(e)));
-                            bright > IRRADIANCE_VARIATION * dim
-                        }
-                })
+                let seen = points.iter().map(|&p| hints::mask(&bvh, hinted, (p, n), bias, near).count_ones());
+                let (lo, hi) = seen.fold((u32::MAX, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
+                (hi - lo) as f32 > LIGHT_VARIATION * hinted.len() as f32
+                    || few && {
+                        let e = points.iter().map(|&p| irradiance(p, n));
+                        let (dim, bright) = e.fold((f32::MAX, 0.0f32), |(lo, hi), e: f32| (lo.min(e), hi.max(e)));
+                        bright > IRRADIANCE_VARIATION * dim
+                    }
+            };
+            let varies = |points: &[Vec3], normals: &[Vec3], n: Vec3| Variation {
+                direct: [n, -n].into_iter().any(|n| direct(points, n)),
+                openness: [1.0, -1.0].into_iter().any(|side| openness_varies(&bvh, (points, normals), side, bias)),
             };
             RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies))
         });
