@@ -231,23 +231,22 @@ impl Bvh {
             }
             let node = &self.nodes[child as usize];
             let (near, hit) = slabs(node, origin, inv, t_best);
-            // The children entered, nearest last, so that it is visited next.
-            let mut entered = [(0 as Child, 0.0f32); 4];
-            let mut n = 0;
+            // The children entered, pushed farthest first so that the nearest is visited next: an insertion
+            // sort in place on the stack (a copy of a few entries from elsewhere compiled to a `memmove` call,
+            // 15 % of the supersampling's time).
+            let base = top;
             let mut lanes = hit;
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let mut i = n;
-                while i > 0 && entered[i - 1].1 < near[lane] {
-                    entered[i] = entered[i - 1];
+                let mut i = top;
+                while i > base && stack[i - 1].1 < near[lane] {
+                    stack[i] = stack[i - 1];
                     i -= 1;
                 }
-                entered[i] = (node.child[lane], near[lane]);
-                n += 1;
+                stack[i] = (node.child[lane], near[lane]);
+                top += 1;
             }
-            stack[top..top + n].copy_from_slice(&entered[..n]);
-            top += n;
         }
         best
     }
