@@ -121,9 +121,24 @@ pub fn mask(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, n
 /// [`mask`], and before it the points a sensor there could see: above its horizon, on the emitter's front,
 /// beyond `near` (whether or not something hides them).
 pub fn masks(bvh: &Bvh, points: &[LightPoint], (p, n): (Vec3, Vec3), bias: f32, near: f32) -> (u64, u64) {
+    masks_among(bvh, points, (p, n), (bias, near), u64::MAX)
+}
+
+/// [`masks`] for the points whose bits `among` holds (no ray to the others, whose bits stay clear): a
+/// caller that needs some groups' shares only (`hints::group_bits`) casts only their rays.
+pub fn masks_among(
+    bvh: &Bvh,
+    points: &[LightPoint],
+    (p, n): (Vec3, Vec3),
+    (bias, near): (f32, f32),
+    among: u64,
+) -> (u64, u64) {
     let origin = p + n * bias;
     let (mut facing, mut mask) = (0u64, 0u64);
     for (k, q) in points.iter().enumerate().take(MAX_POINTS) {
+        if among & (1 << k) == 0 {
+            continue;
+        }
         let d = q.position - origin;
         let length = d.length();
         if d.dot(n) <= 0.0 || q.normal.dot(-d) <= 0.0 || length <= near {

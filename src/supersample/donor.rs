@@ -3,7 +3,7 @@
 
 use std::ops::Range;
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::detect::Point;
@@ -69,11 +69,42 @@ pub fn sub_samples(
             };
             if let Some(l) = light.as_ref().filter(|_| sample.surface != NO_SURFACE) {
                 let donor_visibility = l.visibility[donor as usize];
+                record.donor_visibility = donor_visibility;
+                // First the groups whose light is uneven around the sample: their visibility comes from
+                // shadow rays, and the hints' rays need not be cast at their points.
+                let all = (1 << l.bits.len().min(MAX_GROUPS)) - 1;
+                let groups = if plan.light[n] { all } else { uneven(g, l, plan.pixels[n], &sample).unwrap_or(all) };
+                let mut traced = [-1.0; MAX_GROUPS];
+                let mut traced_donor = [-1.0; MAX_GROUPS];
+                if groups != 0 {
+                    let offsets = (l.bias, l.near);
+                    let set = point_set(k, plan.pixels[n]);
+                    let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
+                    traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, set);
+                    // The donor's light is taken out as it was sensed (what its R holds); by the same rays
+                    // only where it was not measured.
+                    let unmeasured = (0..MAX_GROUPS)
+                        .filter(|&group| groups & (1 << group) != 0 && donor_visibility[group] < 0.0)
+                        .fold(0, |mask, group| mask | 1 << group);
+                    if unmeasured != 0 {
+                        let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
+                        traced_donor = l.shadow.visibility(l.bvh, at_donor, offsets, unmeasured, set);
+                    }
+                }
+                let by_rays = |group: usize| {
+                    traced[group] >= 0.0 && (donor_visibility[group] >= 0.0 || traced_donor[group] >= 0.0)
+                };
+                // The hint points of the groups the shadow rays leave as they are.
+                let among =
+                    (l.bits.iter().enumerate()).filter(|&(group, _)| !by_rays(group)).fold(0, |m, (_, b)| m | b);
+                let masks = |(p, normal): (Vec3, Vec3)| {
+                    hints::masks_among(l.bvh, l.points, (p, normal), (l.bias, l.near), among)
+                };
                 record.visibility = match same_surface {
                     true => match bilinear(g, &|i| l.visibility[i], at, &sample) {
                         Some(v) => with_hint_detail(
                             v,
-                            l,
+                            (l, &masks),
                             (g, at, &sample),
                             (plan.pixels[n], &samples.position[s], &samples.normal[s]),
                         ),
@@ -81,39 +112,15 @@ pub fn sub_samples(
                     },
                     // A sliver no centre shows: the share of each group's hint points it sees.
                     false => {
-                        let (p, normal) = (samples.position[s].truncate(), samples.normal[s].truncate());
-                        let (facing, visible) = hints::masks(l.bvh, l.points, (p, normal), l.bias, l.near);
+                        let (facing, visible) = masks((samples.position[s].truncate(), samples.normal[s].truncate()));
                         let share = hints::shares(l.bits, Some(facing), visible);
                         std::array::from_fn(|g| if share[g] < 0.0 { donor_visibility[g] } else { share[g] })
                     }
                 };
-                record.donor_visibility = donor_visibility;
-                let all = (1 << l.bits.len().min(MAX_GROUPS)) - 1;
-                let groups = if plan.light[n] { all } else { uneven(g, l, plan.pixels[n], &sample).unwrap_or(all) };
-                if groups != 0 {
-                    let offsets = (l.bias, l.near);
-                    let set = point_set(k, plan.pixels[n]);
-                    let at_sample = (samples.position[s].truncate(), samples.normal[s].truncate());
-                    let traced = l.shadow.visibility(l.bvh, at_sample, offsets, groups, set);
-                    // The donor's light is taken out as it was sensed (what its R holds); by the same rays
-                    // only where it was not measured.
-                    let unmeasured = (0..MAX_GROUPS)
-                        .filter(|&group| groups & (1 << group) != 0 && donor_visibility[group] < 0.0)
-                        .fold(0, |mask, group| mask | 1 << group);
-                    let traced_donor = match unmeasured {
-                        0 => [-1.0; MAX_GROUPS],
-                        _ => {
-                            let at_donor = (g.position[donor as usize].truncate(), g.normal[donor as usize].truncate());
-                            l.shadow.visibility(l.bvh, at_donor, offsets, unmeasured, set)
-                        }
-                    };
-                    for group in (0..MAX_GROUPS).filter(|&group| traced[group] >= 0.0) {
-                        if donor_visibility[group] >= 0.0 {
-                            record.visibility[group] = traced[group];
-                        } else if traced_donor[group] >= 0.0 {
-                            record.visibility[group] = traced[group];
-                            record.donor_visibility[group] = traced_donor[group];
-                        }
+                for group in (0..MAX_GROUPS).filter(|&group| by_rays(group)) {
+                    record.visibility[group] = traced[group];
+                    if donor_visibility[group] < 0.0 {
+                        record.donor_visibility[group] = traced_donor[group];
                     }
                 }
             }
@@ -147,9 +154,13 @@ fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32, sample: &Point) -
 /// [0, 1]). A shadow's edge narrower than a pixel is then where the hints put it, not smeared over two
 /// pixels as the bilinear visibility alone would; in even light the two shares cancel. Only where the hints
 /// of the pixel's 3 × 3 neighbourhood differ (elsewhere there is no detail to add).
+/// A point's light hint masks (`hints::masks`), cast only for the groups whose result counts.
+type HintMasks<'a> = &'a dyn Fn((Vec3, Vec3)) -> (u64, u64);
+
+/// `masks`: the sample's hint masks for the groups whose result counts.
 fn with_hint_detail(
     v: Visibility,
-    l: &SubSampleLight<'_>,
+    (l, masks): (&SubSampleLight<'_>, HintMasks<'_>),
     (g, at, sample): (&GBufferData, Vec2, &Point),
     (pixel, position, normal): (u32, &glam::Vec4, &glam::Vec4),
 ) -> Visibility {
@@ -163,7 +174,7 @@ fn with_hint_detail(
     }
     let share = |mask: u64| hints::shares(l.bits, None, mask);
     let Some(between) = bilinear(g, &|i| share(l.hints[i]), at, sample) else { return v };
-    let own = share(hints::mask(l.bvh, l.points, (position.truncate(), normal.truncate()), l.bias, l.near));
+    let own = share(masks((position.truncate(), normal.truncate())).1);
     std::array::from_fn(|k| {
         if v[k] < 0.0 || own[k] < 0.0 || between[k] < 0.0 { v[k] } else { (v[k] + own[k] - between[k]).clamp(0.0, 1.0) }
     })
