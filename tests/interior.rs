@@ -122,7 +122,8 @@ fn the_transports_products_equal_sensing_the_bounces_again() {
 /// where its points' openness differs (`gi::entries::OPENNESS_VARIATION`), so that a point just above the
 /// contact reads an entry sensed near it: the crevice is dark, and the entry of the whole piece, sensed a
 /// hand's width up, was read there many times too bright (most of the hall's whole-image error against the
-/// path tracer, docs/ACCURACY.md "A real interior"). Without the halving the same point reads that entry.
+/// path tracer, docs/ACCURACY.md "A real interior"). Without the halving the same point reads the whole
+/// piece's entry.
 #[test]
 fn a_contacts_crevice_reads_an_entry_sensed_near_it() {
     use sensorlight::gi::RadianceCache;
@@ -153,6 +154,8 @@ fn a_contacts_crevice_reads_an_entry_sensed_near_it() {
     };
     let (near, area) = sensed_at(&RadianceCache::build(mesh, 16, &[], Some(&openness)));
     let (far, whole) = sensed_at(&RadianceCache::build(mesh, 16, &[], None));
-    assert!(near < 0.1, "the entry read 2 cm above the contact is sensed {near} m from it");
-    assert!(far > 2.0 * near && whole > 4.0 * area, "without the halving: {far} m away, area {whole} against {area}");
+    // Measured: a fifth of the piece, sensed 14 cm from the point against 22 cm (and 2.4 cm at 3×, which
+    // darkened the door ajar: `OPENNESS_VARIATION`).
+    assert!(whole > 4.0 * area, "the piece read 2 cm above the contact: {area} m², the whole piece {whole} m²");
+    assert!(near < 0.7 * far, "the entry read there is sensed {near} m from it, without the halving {far} m");
 }
