@@ -57,10 +57,8 @@ pub const MAX_LIGHT_LEVELS: u32 = 2;
 pub const MAX_OPEN_LEVELS: u32 = 3;
 
 // Every split tree fits the shader's walk: [`MAX_SPLITS`] planes of other surfaces, then two a level.
-const _: () = assert!(MAX_SPLITS + 2 * max(MAX_LIGHT_LEVELS, MAX_OPEN_LEVELS) <= crate::gpu_types::CACHE_SPLIT_DEPTH);
-const fn max(a: u32, b: u32) -> u32 {
-    if a > b { a } else { b }
-}
+const _: () = assert!(MAX_SPLITS + 2 * MAX_LIGHT_LEVELS <= crate::gpu_types::CACHE_SPLIT_DEPTH);
+const _: () = assert!(MAX_SPLITS + 2 * MAX_OPEN_LEVELS <= crate::gpu_types::CACHE_SPLIT_DEPTH);
 
 /// A piece is halved where the share of the lights' hint points its spread points see differs by more than
 /// this (`sensors::hints`): a shadow's edge or a streak of light crossing it. Any difference at all would

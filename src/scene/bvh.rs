@@ -1,11 +1,11 @@
 //! A bounding volume hierarchy over the scene's triangles, built binary with binned SAH (Wald 2007), then
 //! collapsed to four children a node (Dammertz et al. 2008, "Shallow bounding volume hierarchies"), whose
 //! boxes one walk step tests at once, four lanes wide; traversed nearest child first. A ray's walk is
-//! bound by memory, not arithmetic (a 0.55 M-triangle hall: about 50 boxes and 5 triangles a shadow ray),
-//! and four children a node halve the steps, each reading one node's two cache lines. Leaves store copies
-//! of their triangles' vertices for locality. The CPU reference
-//! traces with it, and the refinement casts its shadow-ray hints (`sensors::hints`). Built for a mesh
-//! ([`Bvh::of_mesh`]), its rays pass through the mesh's cut-outs.
+//! bound by memory, not arithmetic: in a 0.55 M-triangle hall a shadow ray tested about 50 boxes in 27
+//! steps of the binary tree, and visits about 14 nodes of this one, each two cache lines. Leaves store
+//! copies of their triangles' vertices for locality. The CPU reference traces with it, and the refinement
+//! casts its shadow-ray hints (`sensors::hints`). Built for a mesh ([`Bvh::of_mesh`]), its rays pass
+//! through the mesh's cut-outs.
 
 use std::sync::Arc;
 
@@ -280,12 +280,11 @@ fn collapse(binary: &[Node]) -> (Vec<Node4>, Vec<Leaf>) {
     let mut nodes = Vec::new();
     let mut leaves = Vec::new();
     let root = &binary[0];
-    if root.count > 0 {
-        // A tree of one leaf: a root node with that leaf as its only child.
+    if binary.len() == 1 {
+        // A tree of one leaf: a root node with that leaf as its only child, none where it is empty.
         leaves.push(Leaf { first: root.first, count: root.count });
-        let mut node = node4(&[(root.bounds, LEAF)]);
-        node.lanes = if root.count > 0 && !root.bounds.is_empty() { 1 } else { 0 };
-        nodes.push(node);
+        let children = [(root.bounds, LEAF)];
+        nodes.push(node4(&children[..(root.count > 0) as usize]));
         return (nodes, leaves);
     }
     // (binary interior node, the Node4 slot that becomes it)
@@ -441,6 +440,8 @@ mod tests {
         }
         let bvh = Bvh::build(&tris);
         assert!(bvh.depth() < 40);
+        let empty = Bvh::build(&[]);
+        assert!(empty.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), 0.0, f32::INFINITY).is_none(), "no triangles");
         for _ in 0..2000 {
             let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 1.0;
             let d = Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5);

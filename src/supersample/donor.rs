@@ -149,15 +149,15 @@ fn uneven(g: &GBufferData, l: &SubSampleLight<'_>, pixel: u32, sample: &Point) -
     Some(groups.fold(0, |mask, group| mask | 1 << group))
 }
 
+/// A point's light hint masks (`hints::masks`), cast only for the groups whose result counts.
+type HintMasks<'a> = &'a dyn Fn((Vec3, Vec3)) -> (u64, u64);
+
 /// `v`, a sample's bilinear visibilities, with the detail the light hints see inside the pixel: the share of
 /// each group's hint points the sample sees, less that share bilinear between the same centres (clamped to
 /// [0, 1]). A shadow's edge narrower than a pixel is then where the hints put it, not smeared over two
 /// pixels as the bilinear visibility alone would; in even light the two shares cancel. Only where the hints
-/// of the pixel's 3 × 3 neighbourhood differ (elsewhere there is no detail to add).
-/// A point's light hint masks (`hints::masks`), cast only for the groups whose result counts.
-type HintMasks<'a> = &'a dyn Fn((Vec3, Vec3)) -> (u64, u64);
-
-/// `masks`: the sample's hint masks for the groups whose result counts.
+/// of the pixel's 3 × 3 neighbourhood differ (elsewhere there is no detail to add). `masks`: the sample's
+/// hint masks for the groups whose result counts.
 fn with_hint_detail(
     v: Visibility,
     (l, masks): (&SubSampleLight<'_>, HintMasks<'_>),
