@@ -2,7 +2,9 @@
 //! reference's lit pixels (as `sensorlight compare` counts them), split between supersampled pixels and
 //! pixel centres (the image's `supersampled` AOV, from `render --aovs`), how much of the squared error the
 //! worst pixels hold, and the worst pixels themselves with their surfaces. The reference's noise is left
-//! in. `cargo run --release --example worst_pixels -- IMAGE.exr REFERENCE.exr [N, default 20]`
+//! in. With a fourth argument, a PNG map of the signed error: red where the image is brighter, blue where
+//! darker, full at ±50 %, grey where the reference is unlit.
+//! `cargo run --release --example worst_pixels -- IMAGE.exr REFERENCE.exr [N, default 20] [MAP.png]`
 use std::path::Path;
 
 use anyhow::{Context as _, Result};
@@ -22,7 +24,7 @@ fn luminance(c: &Channels) -> Result<Vec<f32>> {
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: worst_pixels IMAGE.exr REFERENCE.exr [N]";
+    let usage = "usage: worst_pixels IMAGE.exr REFERENCE.exr [N] [MAP.png]";
     let (w, h, image) = read_all(Path::new(args.get(1).context(usage)?))?;
     let (rw, rh, reference) = read_all(Path::new(args.get(2).context(usage)?))?;
     anyhow::ensure!((w, h) == (rw, rh), "the image is {w} × {h}, the reference {rw} × {rh}");
@@ -45,6 +47,9 @@ fn main() -> Result<()> {
             println!("  {name}: {} pixels, RMSE {rms:.4}, {:.0} % of the squared error", part.len(), 100.0 * share);
         }
     }
+    if let Some(map) = args.get(4) {
+        write_map(Path::new(map), w, h, &errors)?;
+    }
     errors.sort_by(|x, y| y.0.abs().total_cmp(&x.0.abs()));
     for k in [10, 20, 50, 100] {
         let rest: f64 = errors.iter().skip(k).map(|(e, _)| e * e).sum();
@@ -61,4 +66,16 @@ fn main() -> Result<()> {
         println!("  ({}, {}): {:+.3}, reference {:.4}, image {:.4}{id}{ss}", i % w, i / w, e, b[i], a[i]);
     }
     Ok(())
+}
+
+/// The signed relative error as colour: grey where unlit, towards red (too bright) or blue (too dark).
+fn write_map(path: &Path, w: usize, h: usize, errors: &[(f64, usize)]) -> Result<()> {
+    let mut rgb = vec![64u8; w * h * 3];
+    for &(e, i) in errors {
+        let t = (e.abs() / 0.5).min(1.0);
+        let (hot, cold) = ((255.0 * t) as u8, 0u8);
+        let px = if e > 0.0 { [255, 255 - hot, 255 - hot] } else { [255 - hot, 255 - hot, 255 - cold] };
+        rgb[3 * i..3 * i + 3].copy_from_slice(&px);
+    }
+    image::save_buffer(path, &rgb, w as u32, h as u32, image::ColorType::Rgb8).context("writing the map")
 }

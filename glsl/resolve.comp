@@ -4,7 +4,8 @@
 // leaves the scene, which the host put in its albedo), adds the light its square emits (exact, from the
 // host) and writes that over the composed image, its alpha the share of the square on a surface
 // (coverage). A sample's R is its donor's final
-// R (a neighbouring pixel on its surface); with the exact light, the light groups' light is recomputed at
+// R (a neighbouring pixel on its surface), or where no pixel around shows its surface, the radiance cache's
+// (the host's `own`, less the lights' light); with the exact light, the light groups' light is recomputed at
 // the sample: R(s) = R(d) + Σ_g (E_g(s)·V_g(s) − E_g(d)·V_g(d)) / π, E_g in closed form (group_light.glsl),
 // V_g chosen by the host (src/supersample/donor.rs). CPU twin: src/supersample/mod.rs resolve_cpu.
 #include "types.glsl"
@@ -56,8 +57,10 @@ void main() {
             misses += s.weight;
             continue;
         }
-        vec3 rs = composed[s.donor].rgb;
-        if (push.exact != 0u) {
+        vec3 rs = s.own.w == 1.0 ? s.own.rgb : composed[s.donor].rgb;
+        if (push.exact != 0u && s.own.w == 1.0) {
+            rs += direct(s.position.xyz, s.normal.xyz, s.visibility);
+        } else if (push.exact != 0u) {
             ivec2 d = ivec2(s.donor % push.width, s.donor / push.width);
             vec4 donor_position = imageLoad(positions, d);
             vec3 at_donor = donor_position.w == 0.0

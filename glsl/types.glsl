@@ -219,6 +219,7 @@ struct GpuSubSample {
     vec4 position;  // w: 1 on a surface, 0 where the ray leaves the scene
     vec4 normal;
     vec4 albedo;    // where the ray leaves the scene: the sky it sees
+    vec4 own;       // w = 1: its own R less its lights' light (the cache's), instead of a donor's
     uint donor;     // the pixel whose final R the sample takes
     float weight;   // the share of its pixel's square it stands for (supersample/coverage.rs)
     uint _pad[2];

@@ -346,6 +346,9 @@ pub struct GpuSubSample {
     pub normal: [f32; 4],
     /// `Kd` at the sample; where it leaves the scene, the radiance it sees there (the sky along its ray).
     pub albedo: [f32; 4],
+    /// Where w is 1, the sample's own R less its lights' light, taken instead of a donor's: the radiance
+    /// cache's where no pixel around it shows its surface (`supersample::donor`, [`crate::gi`]).
+    pub own: [f32; 4],
     /// The pixel whose final R the sample takes: the nearest on the same surface (`supersample::donor`).
     pub donor: u32,
     /// The share of its pixel's square the sample stands for (`supersample::coverage`).

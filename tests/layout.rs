@@ -174,7 +174,17 @@ fn shared_structs_match_glsl() {
         (
             23,
             "GpuSubSample",
-            rust_layout!(GpuSubSample: position, normal, albedo, donor, weight, _pad, visibility, donor_visibility),
+            rust_layout!(
+                GpuSubSample: position,
+                normal,
+                albedo,
+                own,
+                donor,
+                weight,
+                _pad,
+                visibility,
+                donor_visibility
+            ),
         ),
         (25, "GpuSupersampledPixel", rust_layout!(GpuSupersampledPixel: emission, pixel, _pad)),
         (24, "ResolvePush", rust_layout!(ResolvePush: width, count, samples, groups, bias, exact, _pad)),

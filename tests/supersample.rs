@@ -52,7 +52,11 @@ fn gpu_resolve_matches_the_cpu_twin() {
         };
         let all = 0..plan.pixels.len();
         let seen = plan.samples(&scene, &bvh, &g, all.clone());
-        let mut samples = supersample::sub_samples(&g, (&plan, all.clone(), &seen), Some(light));
+        let mut samples = supersample::sub_samples(&g, (&plan, all.clone(), &seen), Some(light), None);
+        // Every fifth sample on a surface with its own R (the radiance cache's), not its donor's.
+        for (k, s) in samples.iter_mut().enumerate().filter(|(k, s)| k % 5 == 0 && s.position[3] == 1.0) {
+            s.own = [noise(k as u32, 8), noise(k as u32, 9), noise(k as u32, 10), 1.0];
+        }
         // A sky that differs along every ray: the GPU must take each leaving sample's own.
         supersample::carry_sky(&mut samples, &seen.points, |at| Vec3::new(0.1 + at.x.fract(), 0.2, 0.3 + at.y.fract()));
         let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
@@ -224,4 +228,52 @@ fn sample_weights_are_the_share_of_the_square_each_surface_covers() {
     assert!(mixed > 100, "pixels showing two surfaces: {mixed}");
     assert!(worst <= 0.01, "a surface's weighed share {worst:.4} from the dense grid's");
     assert!(worst_uniform > 0.03, "1/64 per sample: {worst_uniform:.4} (the test could tell them apart)");
+}
+
+/// Two rooms behind a wall with a vertical slit a fifth of a pixel wide; the camera's room lit dimly, the
+/// other brightly by a panel on its far wall, which is what the slit shows, lit only by the room's other
+/// walls (it holds the panel, so no direct light). No pixel centre sees through the slit, so a sample there
+/// has no pixel of its surface around it: its R comes from the radiance cache, where a pixel of the wall
+/// around the slit lent it its own light, a tenth as bright. Against the oracle over each pixel's square:
+/// the slit's column (its pixels' sum) and the whole image.
+#[test]
+fn a_room_seen_through_a_slit_takes_its_light_from_the_radiance_cache() {
+    use sensorlight::reference::integrator::Integrator;
+    use sensorlight::scene::builtin::rect;
+    use sensorlight::scene::camera::Camera;
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let (c, slit) = (y, 0.01);
+    let half = (1.0 - slit / 2.0) / 2.0;
+    let groups = vec![
+        ("floor", 0, rect(Vec3::ZERO, x * 2.0, z, y)),
+        ("ceiling", 0, rect(2.0 * y, x * 2.0, z, -y)),
+        ("back", 0, rect(c - z, x * 2.0, y, z)),
+        ("front", 0, rect(c + z, x * 2.0, y, -z)),
+        ("left", 0, rect(c - 2.0 * x, z, y, x)),
+        ("right", 0, rect(c + 2.0 * x, z, y, -x)),
+        ("wall", 0, [rect(c + z * (1.0 - half), z * half, y, x), rect(c - z * (1.0 - half), z * half, y, x)].concat()),
+        ("dim", 1, rect(Vec3::new(-1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)),
+        ("bright", 2, rect(Vec3::new(1.99, 1.0, 0.6), z * 0.2, y * 0.2, -x)),
+    ];
+    let materials = vec![
+        common::material("white", 0.8, 0.0),
+        common::material("dim", 0.8, 2.0),
+        common::material("bright", 0.8, 200.0),
+    ];
+    let camera = Camera::look_at(Vec3::new(-1.8, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0), y, 50.0).unwrap();
+    let scene = common::scene(groups, materials, camera, (48, 32));
+    let p = RenderParams::resolve(None, &Overrides::default()).unwrap();
+    let out = common::render(&scene, &common::Setup::of(&p), None);
+    let oracle = Integrator::new(&scene, p.estimator, 1024, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
+    let luminance = |v: Vec4| v.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let column = (scene.camera.project(Vec3::ZERO, 48, 32).unwrap().x) as usize;
+    let (mut render, mut truth) = (0.0, 0.0);
+    for row in 4..28 {
+        let i = row * 48 + column;
+        eprintln!("{row}: render {:.4} oracle {:.4}", luminance(out.image[i]), luminance(oracle.image[i]));
+        render += luminance(out.image[i]);
+        truth += luminance(oracle.image[i]);
+    }
+    eprintln!("column {column}: render {render:.4} oracle {truth:.4}");
+    assert!((render / truth - 1.0).abs() < 0.05, "the slit's column: render {render:.4}, oracle {truth:.4}");
 }

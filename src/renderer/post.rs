@@ -101,8 +101,16 @@ impl Renderer {
         });
         let light = everywhere.as_deref().map(|v| (v, refinement.hints(), rounds.bits.as_slice()));
         let offsets = self.offsets();
+        // The radiance cache's values, for samples on surfaces no pixel around them shows.
+        let cache_values = match &self.cache {
+            Some((cache, _)) if global_illumination && !plan.pixels.is_empty() => {
+                Some(transfer::read_buffer::<Vec4>(&device, &self.scene.cache.values, cache.values_len())?)
+            }
+            _ => None,
+        };
+        let cache_values = cache_values.as_deref();
         let (mut resolved, mut majorities) =
-            self.resolve_supersampled(&plan, (&g, targets), light, offsets, frame.background)?;
+            self.resolve_supersampled(&plan, (&g, targets), light, cache_values, offsets, frame.background)?;
         let mut radiance = transfer::read_buffer::<Vec4>(&device, &targets.composed, pixels)?;
         // Then where the light ends inside a pixel, which only the light as sensed and resolved shows (with
         // the exact light only: the samples' shadow rays place the end, `supersample::shadow`).
@@ -115,7 +123,7 @@ impl Renderer {
             super::sensing::outside(rounds.region, size.width, &mut ends);
             let ends = supersample::plan(&self.host, &self.bvh, &g, &ends);
             let (more, more_majorities) =
-                self.resolve_supersampled(&ends, (&g, targets), light, offsets, frame.background)?;
+                self.resolve_supersampled(&ends, (&g, targets), light, cache_values, offsets, frame.background)?;
             (resolved, majorities) = ([resolved, more].concat(), [majorities, more_majorities].concat());
             plan.append(ends);
         }

@@ -12,7 +12,7 @@ use crate::gbuffer::cast::Visible;
 use crate::passes::resolve::ResolveTargets;
 use crate::scene::ImageSize;
 use crate::sensors::refine::Visibility;
-use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleLight};
+use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleCache, SubSampleLight};
 use crate::vk::{Access, barrier, transfer};
 
 impl Renderer {
@@ -21,11 +21,13 @@ impl Renderer {
     /// samples show another surface than its centre, what the first of those sees (its G-buffer AOVs then
     /// describe one surface, the one most of the pixel shows). `light`, with the exact interpolation: every pixel's visibilities (as interpolated),
     /// light hint, and each light group's hint bits; the sensors' lift and near distance `offsets`.
+    /// `cache_values`: with global illumination, the radiance cache's values the sensors read.
     pub(super) fn resolve_supersampled(
         &mut self,
         plan: &Plan,
         (g, targets): (&GBufferData, &Targets),
         light: Option<(&[Visibility], &[u64], &[u64])>,
+        cache_values: Option<&[Vec4]>,
         (bias, near): (f32, f32),
         background: Vec3,
     ) -> Result<(Vec<Vec4>, Vec<Option<Visible>>)> {
@@ -51,7 +53,13 @@ impl Renderer {
                     near,
                 },
             );
-            let mut samples = supersample::sub_samples(g, (plan, range.clone(), &taken), sample_light);
+            let sample_cache = self.cache.as_ref().zip(cache_values).map(|((cache, _), values)| SubSampleCache {
+                cache,
+                values,
+                eye: self.host.camera.eye,
+                lights: &self.scene.lights,
+            });
+            let mut samples = supersample::sub_samples(g, (plan, range.clone(), &taken), sample_light, sample_cache);
             let camera = &self.host.camera;
             supersample::carry_sky(&mut samples, &taken.points, |at| match &self.host.sky {
                 Some(sky) => sky.radiance(camera.ray(at.x, at.y, g.size.width, g.size.height).dir),

@@ -1,16 +1,20 @@
 //! Where each sub-pixel sample's R comes from (step 3 of `supersample`): its donor, the nearest pixel on its
-//! surface, and with the exact light each group's visibility at the sample and at the donor.
+//! surface, or the radiance cache where no pixel around shows its surface; and with the exact light each
+//! group's visibility at the sample and at the donor.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::detect::Point;
 use super::shadow::{ShadowPoints, point_set};
 use super::{Plan, SAMPLES, Samples, neighbourhood};
 use crate::gbuffer::GBufferData;
+use crate::gi::RadianceCache;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
+use crate::light::groups::Lights;
 use crate::scene::NO_SURFACE;
 use crate::scene::bvh::Bvh;
 use crate::sensors::hints::{self, LightPoint};
@@ -33,6 +37,21 @@ pub struct SubSampleLight<'a> {
     pub near: f32,
 }
 
+/// The radiance cache as the camera's sensors read it (global illumination only). A sample on a surface no
+/// pixel of its 3 × 3 shows (another room seen through a door's gap, a sliver) takes its R from there: a
+/// pixel of another surface lent it its own indirect light, and the door ajar's gap, a sixth of a pixel
+/// wide onto the lit room's jamb and far wall, was a tenth as bright as the path tracer's.
+pub struct SubSampleCache<'a> {
+    pub cache: &'a RadianceCache,
+    /// The values the final gather read (`Kd·R` per entry, then the surface sides' fallbacks).
+    pub values: &'a [Vec4],
+    /// The camera's eye, which sees the sample (the side of a split plane it is read on).
+    pub eye: Vec3,
+    /// The lights: with the exact light, their light at the entry's point is taken out of its R, and the
+    /// resolve adds it at the sample.
+    pub lights: &'a Lights,
+}
+
 /// The resolve's input for the supersampled pixels `range` of `plan`, one per sample of `samples`
 /// (`Plan::samples`: what they see, where, and their weights), against the centres' G-buffer `g`:
 ///
@@ -46,14 +65,18 @@ pub struct SubSampleLight<'a> {
 ///   is in front; but for the groups whose light is uneven around the sample (every group where the plan
 ///   flags the pixel's light or no centre shows the sample's surface, else [`uneven`]), the share of
 ///   the group's light the sample sees by shadow rays (`shadow`), and the donor's as it was sensed (what
-///   its R holds), or by the same rays where it was not measured.
+///   its R holds), or by the same rays where it was not measured;
+/// - with `cache`, a sample on a surface no pixel of the 3 × 3 shows takes as its own R the cache's at its
+///   point, less the lights' light at the entry's point where the resolve adds it at the sample
+///   ([`SubSampleCache`]).
 pub fn sub_samples(
     g: &GBufferData,
     (plan, range, taken): (&Plan, Range<usize>, &Samples),
     light: Option<SubSampleLight<'_>>,
+    cache: Option<SubSampleCache<'_>>,
 ) -> Vec<GpuSubSample> {
     let samples = &taken.seen;
-    (0..samples.surface.len())
+    let (mut records, reads): (Vec<GpuSubSample>, Vec<Option<usize>>) = (0..samples.surface.len())
         .into_par_iter()
         .map(|s| {
             let (n, k) = (range.start + s / SAMPLES, s % SAMPLES);
@@ -124,9 +147,45 @@ pub fn sub_samples(
                     }
                 }
             }
-            record
+            // A surface no pixel around shows: the cache's R at the sample (the value it reads).
+            let read = cache.as_ref().filter(|_| !same_surface && sample.surface != NO_SURFACE).map(|c| {
+                let front = samples.normal[s].w == 1.0;
+                let value = c.cache.lookup_from(samples.position[s].truncate(), c.eye, sample.surface, front);
+                let kd = c.cache.albedo.get(value).copied().unwrap_or(samples.albedo[s].truncate());
+                let r = c.values[value].truncate() / kd;
+                record.own = Vec3::select(kd.cmpgt(Vec3::ZERO), r, Vec3::ZERO).extend(1.0).to_array();
+                value
+            });
+            (record, read)
         })
-        .collect()
+        .unzip();
+    // With the exact light, the resolve adds the lights' light at the sample: take it out of the cache's R
+    // as it is at the entry's point (shadow rays to every point of each group), once per entry read.
+    if let (Some(c), Some(l)) = (&cache, &light) {
+        let entries: BTreeSet<usize> =
+            reads.iter().flatten().filter(|&&v| v < c.cache.entries.len()).copied().collect();
+        let direct: BTreeMap<usize, Vec3> = entries
+            .into_par_iter()
+            .map(|v| {
+                let e = &c.cache.entries[v];
+                let unoccluded = c.lights.unoccluded(e.point + e.normal * l.bias, e.normal);
+                let seen = (0..c.lights.groups.len().min(MAX_GROUPS))
+                    .map(|group| {
+                        let share = l.shadow.share(l.bvh, (e.point, e.normal), (l.bias, l.near), group);
+                        unoccluded[group] * share.unwrap_or(0.0)
+                    })
+                    .sum::<Vec3>();
+                (v, seen / std::f32::consts::PI)
+            })
+            .collect();
+        for (record, read) in records.iter_mut().zip(&reads) {
+            if let Some(d) = read.and_then(|v| direct.get(&v)) {
+                let own = Vec4::from(record.own);
+                record.own = (own.truncate() - *d).max(Vec3::ZERO).extend(1.0).to_array();
+            }
+        }
+    }
+    records
 }
 
 /// The light groups (a bit each) whose light is uneven around a sample of supersampled pixel `pixel` of `g`

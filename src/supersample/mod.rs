@@ -45,7 +45,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use detect::{Flags, detect, light_ends};
-pub use donor::{SubSampleLight, sub_samples};
+pub use donor::{SubSampleCache, SubSampleLight, sub_samples};
 pub use shadow::{SHADOW_RAYS, ShadowPoints};
 
 use crate::gbuffer::GBufferData;
@@ -204,8 +204,11 @@ pub fn resolve_cpu(
                     continue;
                 }
                 let d = s.donor as usize;
-                let mut rs = composed[d].truncate();
-                if exact {
+                let own = Vec4::from(s.own);
+                let mut rs = if own.w == 1.0 { own.truncate() } else { composed[d].truncate() };
+                if exact && own.w == 1.0 {
+                    rs += direct(position, Vec4::from(s.normal), &s.visibility);
+                } else if exact {
                     let at_donor = direct(g.position[d], g.normal[d], &s.donor_visibility);
                     rs = (rs + direct(position, Vec4::from(s.normal), &s.visibility) - at_donor).max(Vec3::ZERO);
                 }
