@@ -13,6 +13,7 @@ mod checks;
 mod config;
 pub mod detail;
 mod estimate;
+mod gaps;
 mod gi;
 mod points;
 mod post;
@@ -70,7 +71,8 @@ pub struct Renderer {
     bvh: Bvh,
     /// Points on the lights for the refinement's light hints (the exact estimator with lights; else `None`).
     light_points: Option<Vec<LightPoint>>,
-    /// Points on the lights that supersampled samples cast shadow rays at (with `light_points`).
+    /// Points on the lights that supersampled samples cast shadow rays at, and sensed pixels whose sensors
+    /// saw part of a light group (`gaps`; with `light_points`).
     shadow_points: Option<ShadowPoints>,
     /// The passes after the sensing: interpolation, filter, composition, the supersampled pixels' resolve.
     passes: PostPasses,

@@ -7,8 +7,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 use super::batch::Sensed;
+use super::gaps::Gaps;
 use super::preview::{PreviewLight, preview};
 use super::targets::Targets;
 use super::{Progress, Renderer, RoundDone, Snapshot};
@@ -86,6 +88,16 @@ impl Renderer {
             Antialiasing::Off => supersample::Plan::default(),
         };
         let supersample_time = t.elapsed();
+        // A light seen through a gap: where a sensor saw part of a group, shadow rays measure it (`gaps`).
+        let hint_masks = masks.clone().unwrap_or_default();
+        let gaps = (self.shadow_points.as_ref()).filter(|_| !hint_masks.is_empty()).map(|points| Gaps {
+            bvh: &self.bvh,
+            points,
+            lights: &self.scene.lights,
+            bits: &bits,
+            offsets: (bias, near),
+        });
+        let mut changes: Vec<(u32, Vec3)> = Vec::new();
         let mut refinement = match masks {
             Some(masks) => refinement.with_hints(masks),
             None => refinement,
@@ -102,10 +114,24 @@ impl Renderer {
                 progress.queued(pending.len() as u64);
                 let read_before = self.runner.times.readback_bytes;
                 let mut deliver = |b: &Sensed<'_>| {
-                    for (&i, f) in b.pixels.iter().zip(b.results) {
+                    let measured: Vec<Option<(Visibility, Vec3)>> = (b.pixels.par_iter().zip(b.results))
+                        .map(|(&i, f)| {
+                            let gaps = gaps.as_ref().filter(|_| exact)?;
+                            let (i, mut v) = (i as usize, f.visibility);
+                            let at = (g.position[i].truncate(), g.normal[i].truncate());
+                            let change = gaps.measure(at, hint_masks[i], &mut v);
+                            (v != f.visibility).then_some((v, change))
+                        })
+                        .collect();
+                    for ((&i, f), measured) in b.pixels.iter().zip(b.results).zip(measured) {
                         r[i as usize] = f.r;
                         if exact {
                             visibility[i as usize] = f.visibility;
+                        }
+                        if let Some((v, change)) = measured {
+                            visibility[i as usize] = v;
+                            r[i as usize] += change.extend(0.0);
+                            changes.push((i, change));
                         }
                         if exact_interpolation {
                             rest[i as usize] = f.rest;
@@ -141,6 +167,15 @@ impl Renderer {
                 resolved_pixels: pixels as u64 - refinement.unresolved_pixels(),
                 pixels: pixels as u64,
             });
+        }
+        // The sensed R the shadow rays moved, in the map the post passes read.
+        if !changes.is_empty() {
+            let map = &targets.sensed.radiance;
+            let mut sensed = transfer::read_buffer::<Vec4>(&self.device, map, pixels)?;
+            for (i, change) in changes {
+                sensed[i as usize] += change.extend(0.0);
+            }
+            transfer::write_buffer(&self.device, map, &sensed)?;
         }
         Ok(Rounds {
             region,
