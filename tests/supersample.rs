@@ -277,3 +277,37 @@ fn a_room_seen_through_a_slit_takes_its_light_from_the_radiance_cache() {
     eprintln!("column {column}: render {render:.4} oracle {truth:.4}");
     assert!((render / truth - 1.0).abs() < 0.05, "the slit's column: render {render:.4}, oracle {truth:.4}");
 }
+
+/// The door ajar's light under the door, a streak on the floor of the camera's room narrower than a pixel at
+/// 80 × 60 that falls between the pixel centres (none of their hints sees the light): the corners of the
+/// pixels' squares see it (`supersample::light_between_centres`), so those pixels are supersampled. Direct
+/// light with the program's defaults, against the oracle over each pixel's square: the streak's pixels
+/// summed, where with the centres' hints alone they were black.
+#[test]
+fn a_streak_of_light_between_the_pixel_centres_is_supersampled() {
+    use sensorlight::params::Bounces;
+    use sensorlight::reference::integrator::Integrator;
+    let mut scene = Scene::load(&common::project("scenes/door-ajar/door-ajar.toml")).unwrap();
+    scene.image = ImageSize { width: 80, height: 60 };
+    let flags = Overrides { bounces: Some(Bounces::Fixed(0)), ..Default::default() };
+    let p = RenderParams::resolve(None, &flags).unwrap();
+    let out = common::render(&scene, &common::Setup::of(&p), None);
+    let oracle = Integrator::new(&scene, p.estimator, 1024, 7).unwrap().render(scene.image, Antialiasing::On, &|_| ());
+    let luminance = |v: Vec4| v.truncate().dot(Vec3::new(0.2126, 0.7152, 0.0722)) as f64;
+    // The floor in front of the door's foot (scripts/make_hard_scenes.py; the camera of the scene file).
+    let streak: Vec<usize> = (33..36).flat_map(|y| (30..40).map(move |x| y * 80 + x)).collect();
+    let (render, truth): (f64, f64) =
+        streak.iter().fold((0.0, 0.0), |(r, t), &i| (r + luminance(out.image[i]), t + luminance(oracle.image[i])));
+    for &i in &streak {
+        eprintln!(
+            "{} {}: render {:.4} oracle {:.4}",
+            i % 80,
+            i / 80,
+            luminance(out.image[i]),
+            luminance(oracle.image[i])
+        );
+    }
+    eprintln!("the streak: render {render:.4}, oracle {truth:.4}");
+    assert!(truth > 0.2, "the oracle sees the streak: {truth}");
+    assert!((render / truth - 1.0).abs() < 0.1, "the streak: render {render:.4}, oracle {truth:.4}");
+}

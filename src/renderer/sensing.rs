@@ -82,6 +82,11 @@ impl Renderer {
         let plan = match frame.aa {
             Antialiasing::On => {
                 let mut flags = supersample::detect(&self.host, g, masks.as_deref().unwrap_or(&[]), &bits);
+                if let (Some(points), Some(masks)) = (&self.light_points, &masks) {
+                    let light = (points.as_slice(), (bias, near));
+                    let between = supersample::light_between_centres(&self.host, &self.bvh, g, light, (masks, &bits));
+                    flags.iter_mut().zip(between).for_each(|(f, between)| f.light |= between);
+                }
                 outside(region, g.size.width, &mut flags);
                 supersample::plan(&self.host, &self.bvh, g, &flags)
             }

@@ -44,7 +44,7 @@ use std::ops::Range;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use detect::{Flags, detect, light_ends};
+pub use detect::{Flags, detect, light_between_centres, light_ends};
 pub use donor::{SubSampleCache, SubSampleLight, sub_samples};
 pub use shadow::{SHADOW_RAYS, ShadowPoints};
 
