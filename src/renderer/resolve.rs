@@ -10,9 +10,9 @@ use super::targets::{Targets, map_buffer};
 use crate::gbuffer::GBufferData;
 use crate::gbuffer::cast::Visible;
 use crate::passes::resolve::ResolveTargets;
-use crate::scene::ImageSize;
+use crate::scene::{ImageSize, SurfaceId};
 use crate::sensors::refine::Visibility;
-use crate::supersample::{self, Plan, SAMPLES, SLICE, SubSampleCache, SubSampleLight};
+use crate::supersample::{self, CacheValue, Plan, SAMPLES, SLICE, SubSampleCache, SubSampleLight};
 use crate::vk::{Access, barrier, transfer};
 
 impl Renderer {
@@ -53,12 +53,21 @@ impl Renderer {
                     near,
                 },
             );
-            let sample_cache = self.cache.as_ref().zip(cache_values).map(|((cache, _), values)| SubSampleCache {
-                cache,
-                values,
-                eye: self.host.camera.eye,
-                lights: &self.scene.lights,
+            let read = self.cache.as_ref().zip(cache_values).map(|((cache, _), values)| {
+                let (eye, mesh) = (self.host.camera.eye, &self.host.mesh);
+                move |p: Vec3, surface: SurfaceId, front: bool| {
+                    let index = cache.lookup_from(p, eye, surface, front);
+                    let entry = cache.entries.get(index);
+                    let kd = cache.albedo.get(index).copied().unwrap_or_else(|| mesh.surface_albedo(surface));
+                    let r = values[index].truncate() / kd;
+                    CacheValue {
+                        index,
+                        r: Vec3::select(kd.cmpgt(Vec3::ZERO), r, Vec3::ZERO),
+                        sensed_at: entry.map(|e| (e.point, e.normal)),
+                    }
+                }
             });
+            let sample_cache = read.as_ref().map(|read| SubSampleCache { read, lights: &self.scene.lights });
             let mut samples = supersample::sub_samples(g, (plan, range.clone(), &taken), sample_light, sample_cache);
             let camera = &self.host.camera;
             supersample::carry_sky(&mut samples, &taken.points, |at| match &self.host.sky {

@@ -2,7 +2,7 @@
 //! surface, or the radiance cache where no pixel around shows its surface; and with the exact light each
 //! group's visibility at the sample and at the donor.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::ops::Range;
 
 use glam::{Vec2, Vec3, Vec4};
@@ -12,11 +12,10 @@ use super::detect::Point;
 use super::shadow::{ShadowPoints, point_set};
 use super::{Plan, SAMPLES, Samples, neighbourhood};
 use crate::gbuffer::GBufferData;
-use crate::gi::RadianceCache;
 use crate::gpu_types::{GpuSubSample, MAX_GROUPS};
 use crate::light::groups::Lights;
-use crate::scene::NO_SURFACE;
 use crate::scene::bvh::Bvh;
+use crate::scene::{NO_SURFACE, SurfaceId};
 use crate::sensors::hints::{self, LightPoint};
 use crate::sensors::refine::Visibility;
 
@@ -42,14 +41,21 @@ pub struct SubSampleLight<'a> {
 /// pixel of another surface lent it its own indirect light, and the door ajar's gap, a sixth of a pixel
 /// wide onto the lit room's jamb and far wall, was a tenth as bright as the path tracer's.
 pub struct SubSampleCache<'a> {
-    pub cache: &'a RadianceCache,
-    /// The values the final gather read (`Kd·R` per entry, then the surface sides' fallbacks).
-    pub values: &'a [Vec4],
-    /// The camera's eye, which sees the sample (the side of a split plane it is read on).
-    pub eye: Vec3,
-    /// The lights: with the exact light, their light at the entry's point is taken out of its R, and the
-    /// resolve adds it at the sample.
+    /// The value a point on a surface's side (`front`) reads, seen from the camera (the renderer's cache).
+    pub read: &'a (dyn Fn(Vec3, SurfaceId, bool) -> CacheValue + Sync),
+    /// The lights: with the exact light, their light where the value was sensed is taken out of its R, and
+    /// the resolve adds it at the sample.
     pub lights: &'a Lights,
+}
+
+/// A radiance cache value as a sample reads it.
+pub struct CacheValue {
+    /// Which value (the same for the samples that read it).
+    pub index: usize,
+    /// R there: the value (`Kd·R`) over its `Kd`.
+    pub r: Vec3,
+    /// Where its sensor was, and its normal (`None`: a surface side's fallback, sensed nowhere).
+    pub sensed_at: Option<(Vec3, Vec3)>,
 }
 
 /// The resolve's input for the supersampled pixels `range` of `plan`, one per sample of `samples`
@@ -76,7 +82,8 @@ pub fn sub_samples(
     cache: Option<SubSampleCache<'_>>,
 ) -> Vec<GpuSubSample> {
     let samples = &taken.seen;
-    let (mut records, reads): (Vec<GpuSubSample>, Vec<Option<usize>>) = (0..samples.surface.len())
+    type Read = Option<(usize, Option<(Vec3, Vec3)>)>;
+    let (mut records, reads): (Vec<GpuSubSample>, Vec<Read>) = (0..samples.surface.len())
         .into_par_iter()
         .map(|s| {
             let (n, k) = (range.start + s / SAMPLES, s % SAMPLES);
@@ -147,14 +154,12 @@ pub fn sub_samples(
                     }
                 }
             }
-            // A surface no pixel around shows: the cache's R at the sample (the value it reads).
+            // A surface no pixel around shows: the cache's R at the sample.
             let read = cache.as_ref().filter(|_| !same_surface && sample.surface != NO_SURFACE).map(|c| {
                 let front = samples.normal[s].w == 1.0;
-                let value = c.cache.lookup_from(samples.position[s].truncate(), c.eye, sample.surface, front);
-                let kd = c.cache.albedo.get(value).copied().unwrap_or(samples.albedo[s].truncate());
-                let r = c.values[value].truncate() / kd;
-                record.own = Vec3::select(kd.cmpgt(Vec3::ZERO), r, Vec3::ZERO).extend(1.0).to_array();
-                value
+                let value = (c.read)(samples.position[s].truncate(), sample.surface, front);
+                record.own = value.r.extend(1.0).to_array();
+                (value.index, value.sensed_at)
             });
             (record, read)
         })
@@ -162,24 +167,22 @@ pub fn sub_samples(
     // With the exact light, the resolve adds the lights' light at the sample: take it out of the cache's R
     // as it is at the entry's point (shadow rays to every point of each group), once per entry read.
     if let (Some(c), Some(l)) = (&cache, &light) {
-        let entries: BTreeSet<usize> =
-            reads.iter().flatten().filter(|&&v| v < c.cache.entries.len()).copied().collect();
-        let direct: BTreeMap<usize, Vec3> = entries
+        let sensed: BTreeMap<usize, (Vec3, Vec3)> =
+            reads.iter().flatten().filter_map(|&(index, at)| Some((index, at?))).collect();
+        let direct: BTreeMap<usize, Vec3> = sensed
             .into_par_iter()
-            .map(|v| {
-                let e = &c.cache.entries[v];
-                let unoccluded = c.lights.unoccluded(e.point + e.normal * l.bias, e.normal);
+            .map(|(index, (p, n))| {
+                let unoccluded = c.lights.unoccluded(p + n * l.bias, n);
                 let seen = (0..c.lights.groups.len().min(MAX_GROUPS))
                     .map(|group| {
-                        let share = l.shadow.share(l.bvh, (e.point, e.normal), (l.bias, l.near), group);
-                        unoccluded[group] * share.unwrap_or(0.0)
+                        unoccluded[group] * l.shadow.share(l.bvh, (p, n), (l.bias, l.near), group).unwrap_or(0.0)
                     })
                     .sum::<Vec3>();
-                (v, seen / std::f32::consts::PI)
+                (index, seen / std::f32::consts::PI)
             })
             .collect();
         for (record, read) in records.iter_mut().zip(&reads) {
-            if let Some(d) = read.and_then(|v| direct.get(&v)) {
+            if let Some(d) = read.and_then(|(index, _)| direct.get(&index)) {
                 let own = Vec4::from(record.own);
                 record.own = (own.truncate() - *d).max(Vec3::ZERO).extend(1.0).to_array();
             }

@@ -45,7 +45,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use detect::{Flags, detect, light_between_centres, light_ends};
-pub use donor::{SubSampleCache, SubSampleLight, sub_samples};
+pub use donor::{CacheValue, SubSampleCache, SubSampleLight, sub_samples};
 pub use shadow::{SHADOW_RAYS, ShadowPoints};
 
 use crate::gbuffer::GBufferData;
