@@ -93,9 +93,10 @@ impl Renderer {
             Antialiasing::Off => supersample::Plan::default(),
         };
         let supersample_time = t.elapsed();
-        // A light seen through a gap: where a sensor saw part of a group, shadow rays measure it (`gaps`).
-        let hint_masks = masks.clone().unwrap_or_default();
-        let gaps = (self.shadow_points.as_ref()).filter(|_| !hint_masks.is_empty()).map(|points| Gaps {
+        // A light seen through a gap: where a sensor saw part of a group, shadow rays measure it (`gaps`;
+        // the exact estimator's visibilities, and the light hints).
+        let exact = self.estimate.groups > 0;
+        let gaps = (self.shadow_points.as_ref()).filter(|_| exact && masks.is_some()).map(|points| Gaps {
             bvh: &self.bvh,
             points,
             lights: &self.scene.lights,
@@ -108,7 +109,6 @@ impl Renderer {
             None => refinement,
         };
         let mut r = vec![Vec4::ZERO; pixels];
-        let exact = self.estimate.groups > 0;
         let mut visibility: Vec<Visibility> = if exact { vec![[-1.0; MAX_GROUPS]; pixels] } else { Vec::new() };
         let exact_interpolation = self.estimate.exact_interpolation;
         let mut rest = if exact_interpolation { vec![Vec4::ZERO; pixels] } else { Vec::new() };
@@ -118,10 +118,11 @@ impl Renderer {
             if !pending.is_empty() {
                 progress.queued(pending.len() as u64);
                 let read_before = self.runner.times.readback_bytes;
+                let hint_masks = refinement.hints();
                 let mut deliver = |b: &Sensed<'_>| {
                     let measured: Vec<Option<(Visibility, Vec3)>> = (b.pixels.par_iter().zip(b.results))
                         .map(|(&i, f)| {
-                            let gaps = gaps.as_ref().filter(|_| exact)?;
+                            let gaps = gaps.as_ref()?;
                             let (i, mut v) = (i as usize, f.visibility);
                             let at = (g.position[i].truncate(), g.normal[i].truncate());
                             let change = gaps.measure(at, hint_masks[i], &mut v);
