@@ -101,12 +101,13 @@ impl Renderer {
         });
         let light = everywhere.as_deref().map(|v| (v, refinement.hints(), rounds.bits.as_slice()));
         let offsets = self.offsets();
-        // The radiance cache's values, for samples on surfaces no pixel around them shows.
-        let cache_values = match &self.cache {
-            Some((cache, _)) if global_illumination && !plan.pixels.is_empty() => {
-                Some(transfer::read_buffer::<Vec4>(&device, &self.scene.cache.values, cache.values_len())?)
-            }
-            _ => None,
+        // The radiance cache's values, for samples on surfaces no pixel around them shows (the pixels where
+        // the light ends below are resolved even where `plan` holds none).
+        let supersampling = frame.aa == Antialiasing::On;
+        let cache_values = if global_illumination && supersampling && self.cache.is_some() {
+            Some(self.cache_values()?)
+        } else {
+            None
         };
         let cache_values = cache_values.as_deref();
         let (mut resolved, mut majorities) =
