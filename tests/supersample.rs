@@ -244,17 +244,13 @@ fn a_room_seen_through_a_slit_takes_its_light_from_the_radiance_cache() {
     let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
     let (c, slit) = (y, 0.01);
     let half = (1.0 - slit / 2.0) / 2.0;
-    let groups = vec![
-        ("floor", 0, rect(Vec3::ZERO, x * 2.0, z, y)),
-        ("ceiling", 0, rect(2.0 * y, x * 2.0, z, -y)),
-        ("back", 0, rect(c - z, x * 2.0, y, z)),
-        ("front", 0, rect(c + z, x * 2.0, y, -z)),
-        ("left", 0, rect(c - 2.0 * x, z, y, x)),
-        ("right", 0, rect(c + 2.0 * x, z, y, -x)),
+    // The two rooms' shell (`common::two_rooms`), its dividing wall at x = 0 cut by the slit.
+    let mut groups = common::two_rooms_shell();
+    groups.extend([
         ("wall", 0, [rect(c + z * (1.0 - half), z * half, y, x), rect(c - z * (1.0 - half), z * half, y, x)].concat()),
         ("dim", 1, rect(Vec3::new(-1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)),
         ("bright", 2, rect(Vec3::new(1.99, 1.0, 0.6), z * 0.2, y * 0.2, -x)),
-    ];
+    ]);
     let materials = vec![
         common::material("white", 0.8, 0.0),
         common::material("dim", 0.8, 2.0),

@@ -105,15 +105,8 @@ pub fn scene(
 pub fn two_rooms(thickness: f32, size: (u32, u32)) -> Scene {
     let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
     let c = y;
-    let mut groups = vec![
-        ("floor", 0, rect(Vec3::ZERO, x * 2.0, z, y)),
-        ("ceiling", 0, rect(2.0 * y, x * 2.0, z, -y)),
-        ("back", 0, rect(c - z, x * 2.0, y, z)),
-        ("front", 0, rect(c + z, x * 2.0, y, -z)),
-        ("left", 0, rect(c - 2.0 * x, z, y, x)),
-        ("right", 0, rect(c + 2.0 * x, z, y, -x)),
-        ("light", 1, rect(Vec3::new(1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)),
-    ];
+    let mut groups = two_rooms_shell();
+    groups.push(("light", 1, rect(Vec3::new(1.0, 1.99, 0.0), x * 0.3, z * 0.3, -y)));
     if thickness == 0.0 {
         groups.push(("wall", 0, rect(c, z, y, x)));
     } else {
@@ -124,6 +117,21 @@ pub fn two_rooms(thickness: f32, size: (u32, u32)) -> Scene {
     let camera = Camera::look_at(Vec3::new(-1.8, 1.5, 0.8), Vec3::new(0.0, 0.3, -0.3), y, 70.0).unwrap();
     let materials = vec![material("white", 0.8, 0.0), material("light", 0.8, 50.0)];
     scene(groups, materials, camera, size)
+}
+
+/// The shell around [`two_rooms`]: floor, ceiling and four walls facing in (x in [-2, 2], y in [0, 2], z in
+/// [-1, 1]), material 0, no divider.
+pub fn two_rooms_shell() -> Vec<(&'static str, usize, Vec<[Vec3; 3]>)> {
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let c = y;
+    vec![
+        ("floor", 0, rect(Vec3::ZERO, x * 2.0, z, y)),
+        ("ceiling", 0, rect(2.0 * y, x * 2.0, z, -y)),
+        ("back", 0, rect(c - z, x * 2.0, y, z)),
+        ("front", 0, rect(c + z, x * 2.0, y, -z)),
+        ("left", 0, rect(c - 2.0 * x, z, y, x)),
+        ("right", 0, rect(c + 2.0 * x, z, y, -x)),
+    ]
 }
 
 /// A closed cube of side 2 centred at the origin, every face emitting `ke` towards the inside, camera inside.
