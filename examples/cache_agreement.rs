@@ -1,7 +1,8 @@
 //! The radiance cache against the oracle at its own points (docs/DESIGN.md §10): after the bounces, each
 //! entry's reflected radiance `Kd·R` beside the path tracer's at the same point and side; the relative RMSE
 //! and bias over the lit entries, all and split by a plane (e.g. the two rooms of the door ajar).
-//! `cargo run --release --example cache_agreement -- SCENE.toml [SAMPLES] [AXIS VALUE]`
+//! `cargo run --release --example cache_agreement -- SCENE.toml [SAMPLES] [AXIS VALUE]`; `RES=N`: the cache's
+//! cells along the longest side (default 16).
 
 use anyhow::{Context as _, Result};
 use glam::Vec3;
@@ -28,7 +29,8 @@ fn main() -> Result<()> {
     let indirect = Indirect::Bounces(bounces.map_or(Bounces::Converged, Bounces::Fixed));
     let oracle_indirect = Indirect::Bounces(bounces.map_or(Bounces::Converged, |n| Bounces::Fixed(n - 1)));
     let frame = FrameParams::every_pixel(indirect, Vec3::ZERO);
-    let cache = CacheConfig::new(16, 16);
+    let res = std::env::var("RES").ok().and_then(|s| s.parse().ok()).unwrap_or(16);
+    let cache = CacheConfig::new(res, 16);
     let mut renderer = Renderer::builder(&device, &scene, SensorKind::Hemicube, 32)
         .radiance_cache(Some(cache))
         .build_unchecked(StrategyKind::Layered)?;

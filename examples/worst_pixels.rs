@@ -4,7 +4,8 @@
 //! worst pixels hold, and the worst pixels themselves with their surfaces. The reference's noise is left
 //! in. With a fourth argument, a PNG map of the signed error: red where the image is brighter, blue where
 //! darker, full at ±50 %, grey where the reference is unlit.
-//! `cargo run --release --example worst_pixels -- IMAGE.exr REFERENCE.exr [N, default 20] [MAP.png]`
+//! `cargo run --release --example worst_pixels -- IMAGE.exr REFERENCE.exr [N, default 20] [MAP.png]`; with
+//! `INTERIOR=1`, silhouettes masked as `compare` masks them.
 use std::path::Path;
 
 use anyhow::{Context as _, Result};
@@ -34,8 +35,13 @@ fn main() -> Result<()> {
     let surface = channel(&image, "surface_id");
     let mean = b.iter().sum::<f32>() / b.len() as f32;
     // (relative error, pixel) over the reference's lit pixels.
+    // INTERIOR=1: silhouettes masked as `compare` masks them (its "interior").
+    let masked = match (std::env::var_os("INTERIOR"), surface) {
+        (Some(_), Some(ids)) => sensorlight::metrics::compare::silhouettes(w, h, ids),
+        _ => vec![false; w * h],
+    };
     let mut errors: Vec<(f64, usize)> =
-        (0..w * h).filter(|&i| b[i] > 0.01 * mean).map(|i| (((a[i] - b[i]) / b[i]) as f64, i)).collect();
+        (0..w * h).filter(|&i| b[i] > 0.01 * mean && !masked[i]).map(|i| (((a[i] - b[i]) / b[i]) as f64, i)).collect();
     let total: f64 = errors.iter().map(|(e, _)| e * e).sum();
     let count = errors.len() as f64;
     println!("{} lit pixels: relative RMSE {:.4} (the reference's noise in)", errors.len(), (total / count).sqrt());
