@@ -1,5 +1,5 @@
 #version 460
-// Reduction (docs/DESIGN.md §3 step 4): one workgroup per sensor reduces its layers to R and writes it
+// Reduction (docs/DESIGN.md §3 step 5): one workgroup per sensor reduces its layers to R and writes it
 // into the radiance map at the sensor's pixel (w = STATE_SENSED) and into the batch's results, which the
 // host reads back: a refinement round reads exactly what it sensed. The main layers' share of R (with the
 // exact estimator: all but the emitters' closed-form light, so the light surfaces reflect and the
@@ -27,6 +27,14 @@
 // memory, so rounding grows like log2(64) there, not like the texel count. 64 threads, not 256: a CPU driver
 // runs a workgroup's invocations as coroutines that all switch at every barrier, and with 256 the barriers
 // cost more than the sums (docs/BENCHMARKS.md); a GPU still has hundreds of sensors' workgroups in flight.
+//
+// Slits (docs/DESIGN.md §3 step 5): a bright surface seen through a gap narrower than a texel (the lit room
+// through a door ajar) lands on whole texels or on none, as their centres fall, so one pixel's R is twice the
+// truth and its neighbour's half. Where a texel is THIN_BRIGHTNESS times the map's mean and THIN_CONTRAST
+// times its darker neighbours along a row or a column (a feature one texel wide), its light is counted; the
+// share of the main layers' light such texels hold goes into the results (rest.w), and the renderer senses
+// the sensors where it is large again at a finer rd (src/renderer/fine.rs). The second walk that finds them
+// runs only where some texel is that bright: most sensors pay one maximum.
 #include "types.glsl"
 #define SKY_BINDING 11
 #include "sky.glsl"
@@ -49,11 +57,20 @@ layout(std430, set = 0, binding = 10) readonly buffer Directions { vec4 directio
 layout(push_constant) uniform Push { ReducePush push; };
 
 shared vec3 partial[64];
+// Per thread: the brightest main-layer texel's luminance, then the light of the thin bright texels.
+shared float partial_thin[64];
 // Per thread, for the light group being measured: its visible and unoccluded coverage.
 shared vec2 partial_light[64];
 // What the sensor saw of each group, for the results. Kept in shared memory rather than in each thread:
 // a CPU driver keeps whatever a thread holds across a barrier in that thread's coroutine frame.
 shared float seen[MAX_GROUPS];
+
+const float THIN_BRIGHTNESS = 16.0;
+const float THIN_CONTRAST = 4.0;
+
+float luminance(vec3 c) {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
 
 // Where layer `layer` of sensor `sensor` is: an array layer, or a tile of the atlas.
 ivec3 map_origin(uint sensor, uint layer) {
@@ -62,6 +79,55 @@ ivec3 map_origin(uint sensor, uint layer) {
         return ivec3(uvec2(slot % push.atlas_columns, slot / push.atlas_columns) * push.rd, 0);
     }
     return ivec3(0, 0, int(slot));
+}
+
+// The luminance of main-layer texel (x, y) of a layer at `origin`, as the sums count it; a texel off the
+// layer or showing the sky counts as `otherwise` (no darker neighbour there).
+float neighbour(ivec3 origin, int x, int y, float otherwise) {
+    int rd = int(push.rd);
+    if (x < 0 || y < 0 || x >= rd || y >= rd) {
+        return otherwise;
+    }
+    vec4 texel = imageLoad(sensor_maps, origin + ivec3(x, y, 0));
+    return texel.a < 0.0 ? otherwise : luminance(texel.rgb * (texel.a > 0.0 ? push.emission_scale : 1.0));
+}
+
+// The share of the main layers' light `total` (Σ luminance · weight) held by thin bright texels (see the top).
+// partial_thin[0] holds the brightest texel's luminance on entry; every thread must call it.
+float thin_light(uint main_layers, float total) {
+    float bright = THIN_BRIGHTNESS * total / PI;
+    if (!(partial_thin[0] > bright) || total <= 0.0) {
+        return 0.0;  // nothing that bright: the same answer in every thread
+    }
+    barrier();  // every thread has read the maximum before it is overwritten
+    float light = 0.0;
+    uvec2 thread = gl_LocalInvocationID.xy;
+    uint rd = push.rd;
+    for (uint layer = 0u; layer < main_layers; layer++) {
+        ivec3 origin = map_origin(gl_WorkGroupID.x, layer);
+        uint weight_base = layer * rd * rd;
+        for (uint y = thread.y; y < rd; y += 8u) {
+            for (uint x = thread.x; x < rd; x += 8u) {
+                float l = neighbour(origin, int(x), int(y), 0.0);
+                if (l > bright) {
+                    int ix = int(x), iy = int(y);
+                    float across = max(neighbour(origin, ix - 1, iy, l), neighbour(origin, ix + 1, iy, l));
+                    float along = max(neighbour(origin, ix, iy - 1, l), neighbour(origin, ix, iy + 1, l));
+                    light += l > THIN_CONTRAST * min(across, along) ? l * weights[weight_base + y * rd + x] : 0.0;
+                }
+            }
+        }
+    }
+    uint lid = gl_LocalInvocationIndex;
+    partial_thin[lid] = light;
+    barrier();
+    for (uint stride = 32u; stride > 0u; stride >>= 1u) {
+        if (lid < stride) {
+            partial_thin[lid] += partial_thin[lid + stride];
+        }
+        barrier();
+    }
+    return partial_thin[0] / total;
 }
 
 void main() {
@@ -73,6 +139,7 @@ void main() {
     // The main layers: Ck (the rest, in the exact estimator) weighted by the precomputed texel weights.
     GpuSensor frame = sensors[sensor];
     vec3 sum = vec3(0.0);
+    float brightest = 0.0;
     // Main layers drawn with the cache's entries (the transport's rows) hold no light.
     uint main_layers = push.main_entries != 0u ? 0u : push.main_layers;
     for (uint layer = 0u; layer < main_layers; layer++) {
@@ -88,18 +155,22 @@ void main() {
                     ck = sky_radiance(frame.t.xyz * d.x + frame.b.xyz * d.y + frame.n.xyz * d.z, d.w);
                 }
                 sum += ck * weights[row + x];
+                brightest = texel.a >= 0.0 ? max(brightest, luminance(ck)) : brightest;
             }
         }
     }
     partial[lid] = sum;
+    partial_thin[lid] = brightest;
     barrier();
     for (uint stride = 32u; stride > 0u; stride >>= 1u) {
         if (lid < stride) {
             partial[lid] += partial[lid + stride];
+            partial_thin[lid] = max(partial_thin[lid], partial_thin[lid + stride]);
         }
         barrier();
     }
     vec3 r = partial[0];
+    float thin_share = thin_light(main_layers, luminance(r));
 
     // Each light group: its exact unoccluded irradiance, and its coverage in the zoom pair (exact estimator).
     if (lid < MAX_GROUPS) {
@@ -162,7 +233,7 @@ void main() {
         radiance[pixels[sensor]] = value;
         indirect[pixels[sensor]] = vec4(partial[0] / PI, STATE_SENSED);
         results[sensor].r = value;
-        results[sensor].rest = vec4(partial[0] / PI, 0.0);
+        results[sensor].rest = vec4(partial[0] / PI, thin_share);
         for (uint g = 0u; g < MAX_GROUPS; g++) {
             results[sensor].visibility[g] = seen[g];
         }

@@ -83,7 +83,8 @@ const uint MAX_GROUPS = 8u;
 struct GpuSensorResult {
     vec4 r;
     float visibility[MAX_GROUPS];  // -1 where the group sends nothing
-    vec4 rest;                     // R's part from the main layers (all but the groups' exact light)
+    vec4 rest;                     // R's part from the main layers (all but the groups' exact light);
+                                   // w: the share of it thin bright texels hold (reduce.comp)
 };
 
 struct SensorPush {

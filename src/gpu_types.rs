@@ -176,7 +176,8 @@ pub struct GpuSensorResult {
     /// the group sends this sensor nothing.
     pub visibility: [f32; MAX_GROUPS],
     /// R's part from the main layers (the indirect light, `Kd·ε`, the background: all but the exact
-    /// estimator's `Σ E_g·V_g`); w unused.
+    /// estimator's `Σ E_g·V_g`); w: the share of the main layers' light that thin bright texels hold, a slit
+    /// narrower than a texel (`glsl/reduce.comp`, `renderer::fine`).
     pub rest: Vec4,
 }
 

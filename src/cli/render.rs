@@ -10,7 +10,7 @@ use sensorlight::cancel::Cancel;
 use sensorlight::gpu_types::radiance_state;
 use sensorlight::output::{atomic, exr::ExrImage, png};
 use sensorlight::params::{Antialiasing, FrameParams, RenderParams};
-use sensorlight::renderer::{LaterBounces, RenderOutput, RenderStats};
+use sensorlight::renderer::{FINE_FACTOR, LaterBounces, RenderOutput, RenderStats};
 use sensorlight::scene::Scene;
 use sensorlight::strategy::{Cache, Event};
 
@@ -329,6 +329,10 @@ fn print_details(s: &RenderStats) {
         _ => String::new(),
     };
     let rounds: Vec<String> = s.sensors_per_round.iter().map(u64::to_string).collect();
+    let fine = match s.fine_sensors {
+        0 => String::new(),
+        n => format!(", and {n} again at rd {} where a slit fell between texels", FINE_FACTOR * s.sensor_size),
+    };
     let read_back: u64 = s.readback_bytes_per_round.iter().sum();
     sensorlight::errln!(
         "{} sensors ({}, rd {}, {}) in {} batches of up to {}, {} in flight; per refinement round: {}; {} quads \
@@ -340,7 +344,7 @@ fn print_details(s: &RenderStats) {
         s.batches,
         s.batch_size,
         s.in_flight,
-        rounds.join(" + "),
+        rounds.join(" + ") + &fine,
         s.interpolated_quads,
         read_back as f64 / 1024.0
     );

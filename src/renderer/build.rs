@@ -12,7 +12,7 @@ use super::batch::BatchRunner;
 use super::checks::{check_cache_size, check_size, check_textures};
 use super::config::{CacheConfig, DEFAULT_IN_FLIGHT, Detail, RendererConfig, default_memory_budget};
 use super::estimate::Estimate;
-use super::{PostPasses, Renderer, detail, probe};
+use super::{PostPasses, Renderer, detail, fine, probe};
 use crate::gi::RadianceCache;
 use crate::gi::entries::{IRRADIANCE_VARIATION, LIGHT_VARIATION, Variation, openness_varies};
 use crate::gpu_scene::GpuScene;
@@ -253,6 +253,17 @@ impl Renderer {
             budget,
             cull_triangles: config.cull_triangles(),
         };
+        // The finer sensors where a slit falls between texels (`fine`): an eighth of the budget, if that holds
+        // at least one of them. With the exact estimator only: the paper's is reproduced as it is.
+        let fine = match fine::fine_rd(config.sensor_size).filter(|_| desc.exact()) {
+            Some(rd) if budget / 8 >= layout.layers() as u64 * (rd as u64).pow(2) * TEXEL_BYTES => {
+                let desc = StrategyDesc { rd, budget: budget / 8, ..desc };
+                budget -= budget / 8;
+                Some(BatchRunner::new(device, &gpu_scene, choice.strategy, desc, config.in_flight, offsets)?)
+            }
+            _ => None,
+        };
+        let desc = StrategyDesc { budget, ..desc };
         Ok(Self {
             host: scene.clone(),
             bvh,
@@ -264,6 +275,7 @@ impl Renderer {
                 // no shadow rays give its direct light (`gi::solve`).
                 if cache.is_some() && !estimate.direct_by_rays { runner.with_rows()? } else { runner }
             },
+            fine,
             passes: PostPasses {
                 interpolate: InterpolatePass::new(device)?,
                 filter: FilterPass::new(device)?,

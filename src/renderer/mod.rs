@@ -13,6 +13,7 @@ mod checks;
 mod config;
 pub mod detail;
 mod estimate;
+mod fine;
 mod gaps;
 mod gi;
 mod points;
@@ -38,6 +39,7 @@ use checks::check_finite;
 pub use config::{
     CLUSTER_MIN_TRIANGLES, CacheConfig, DEFAULT_IN_FLIGHT, Detail, RendererConfig, default_memory_budget,
 };
+pub use fine::FINE_FACTOR;
 pub use gi::{BounceDone, CacheLevel, GiStats, LaterBounces};
 use post::Post;
 pub use probe::probe_pixels;
@@ -65,6 +67,8 @@ use crate::vk::{Device, transfer};
 pub struct Renderer {
     // Field order is drop order: the runner waits for its batches first.
     runner: BatchRunner,
+    /// The finer sensors sensed again where a slit fell between the texels (`fine`), where the rd allows.
+    fine: Option<BatchRunner>,
     /// The scene on the host and its triangles' BVH: the supersampling casts its samples' camera rays
     /// there, the light hints their shadow rays.
     host: Scene,
@@ -259,6 +263,7 @@ impl Renderer {
         let counts = stats::Counts {
             sensors_per_round: rounds.per_round,
             readback_bytes_per_round: rounds.readback_per_round,
+            fine_sensors: rounds.fine_sensors,
             interpolated_quads: rounds.refinement.interpolated().len() as u64,
             supersampled_pixels: post.supersampled.len() as u64,
             gi,

@@ -3,6 +3,7 @@
 //! refinement reads. Before the first round, the light hints (which points on the lights each pixel sees)
 //! and which pixels take sub-pixel samples (docs/DESIGN.md §11).
 
+use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
@@ -10,6 +11,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::batch::Sensed;
+use super::fine::Slits;
 use super::gaps::Gaps;
 use super::preview::{PreviewLight, preview};
 use super::targets::Targets;
@@ -40,6 +42,8 @@ pub(super) struct Rounds {
     /// Sensors, and bytes read back, per round.
     pub(super) per_round: Vec<u64>,
     pub(super) readback_per_round: Vec<u64>,
+    /// Sensors sensed again at the finer rd where a slit fell between the texels (`fine`).
+    pub(super) fine_sensors: u64,
     /// The host's time on the light hints and the refinement's steps; on the supersampling plan.
     pub(super) refine_time: Duration,
     pub(super) supersample_time: Duration,
@@ -103,7 +107,9 @@ impl Renderer {
             bits: &bits,
             offsets: (bias, near),
         });
-        let mut changes: Vec<(u32, Vec3)> = Vec::new();
+        // Per pixel, what the shadow rays moved its last sensor's R by.
+        let mut changes = vec![Vec3::ZERO; pixels];
+        let slits = RefCell::new(Slits::new(g.size));
         let mut refinement = match masks {
             Some(masks) => refinement.with_hints(masks),
             None => refinement,
@@ -134,11 +140,13 @@ impl Renderer {
                         if exact {
                             visibility[i as usize] = f.visibility;
                         }
+                        changes[i as usize] = Vec3::ZERO;
                         if let Some((v, change)) = measured {
                             visibility[i as usize] = v;
                             r[i as usize] += change.extend(0.0);
-                            changes.push((i, change));
+                            changes[i as usize] = change;
                         }
+                        slits.borrow_mut().record(i, f.rest.w);
                         if exact_interpolation {
                             rest[i as usize] = f.rest;
                         }
@@ -147,6 +155,18 @@ impl Renderer {
                 };
                 self.runner.sense_or_stop(g, &pending, ck, &mut deliver, &|| progress.cancelled())?;
                 self.runner.drain(&mut deliver)?;
+                // Where a slit fell between the texels, finer sensors (`fine`), until none is near another.
+                if let Some(fine) = &mut self.fine {
+                    loop {
+                        let again = slits.borrow_mut().take();
+                        if again.is_empty() {
+                            break;
+                        }
+                        progress.queued(again.len() as u64);
+                        fine.sense_or_stop(g, &again, ck, &mut deliver, &|| progress.cancelled())?;
+                        fine.drain(&mut deliver)?;
+                    }
+                }
                 per_round.push(pending.len() as u64);
                 readback_per_round.push(self.runner.times.readback_bytes - read_before);
                 let round = per_round.len() as u32;
@@ -175,15 +195,15 @@ impl Renderer {
             });
         }
         // The sensed R the shadow rays moved, in the map the post passes read.
-        if !changes.is_empty() {
+        if changes.iter().any(|&c| c != Vec3::ZERO) {
             let map = &targets.sensed.radiance;
             let mut sensed = transfer::read_buffer::<Vec4>(&self.device, map, pixels)?;
-            for (i, change) in changes {
-                sensed[i as usize] += change.extend(0.0);
-            }
+            sensed.iter_mut().zip(&changes).for_each(|(r, change)| *r += change.extend(0.0));
             transfer::write_buffer(&self.device, map, &sensed)?;
         }
+        let fine_sensors = slits.into_inner().count();
         Ok(Rounds {
+            fine_sensors,
             region,
             visibility,
             refinement,

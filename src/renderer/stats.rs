@@ -30,6 +30,9 @@ pub struct RenderStats {
     pub sensors_per_round: Vec<u64>,
     /// Bytes read back to the host after each round: the R of the sensors it placed.
     pub readback_bytes_per_round: Vec<u64>,
+    /// Sensors sensed again at twice the rd where a slit fell between their texels (docs/DESIGN.md §3 step
+    /// 5): pixels `sensors` counts once already.
+    pub fine_sensors: u64,
     pub interpolated_quads: u64,
     /// Whether pixels are their square (`on`) or their centre.
     pub aa: crate::params::Antialiasing,
@@ -133,6 +136,7 @@ pub(super) struct Engine {
 pub(super) struct Counts {
     pub sensors_per_round: Vec<u64>,
     pub readback_bytes_per_round: Vec<u64>,
+    pub fine_sensors: u64,
     pub interpolated_quads: u64,
     pub supersampled_pixels: u64,
     pub gi: Option<super::GiStats>,
@@ -150,7 +154,8 @@ impl RenderStats {
     ) -> Self {
         let total = total.as_secs_f64();
         let sensors: u64 = counts.sensors_per_round.iter().sum();
-        let all_sensors = sensors + counts.gi.as_ref().map_or(0, |g| g.entries * g.bounces as u64);
+        let all_sensors =
+            sensors + counts.fine_sensors + counts.gi.as_ref().map_or(0, |g| g.entries * g.bounces as u64);
         Self {
             device: device.adapter.name.clone(),
             driver: device.adapter.driver.clone(),
@@ -166,6 +171,7 @@ impl RenderStats {
             sensors,
             sensors_per_round: counts.sensors_per_round,
             readback_bytes_per_round: counts.readback_bytes_per_round,
+            fine_sensors: counts.fine_sensors,
             interpolated_quads: counts.interpolated_quads,
             aa: frame.aa,
             supersampled_pixels: counts.supersampled_pixels,

@@ -83,6 +83,9 @@ impl Renderer {
             Ok(())
         })?;
         self.runner.bind(&targets.sensed)?;
+        if let Some(fine) = &mut self.fine {
+            fine.bind(&targets.sensed)?;
+        }
         Ok((targets, g, sky))
     }
 }
