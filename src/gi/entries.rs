@@ -172,6 +172,9 @@ pub struct Pieces {
     /// Entry pairs whose direct light is the mean over points spread over their piece (it varies over it
     /// and it can be halved no more), with those points.
     pub spread: Vec<(u32, [Vec3; SAMPLES_PER_PIECE])>,
+    /// Per entry pair, points spread over its piece (stratified by area, off its edges), with the front
+    /// normals of the triangles they lie on.
+    pub points: Vec<[(Vec3, Vec3); SAMPLES_PER_PIECE]>,
 }
 
 /// The packed cell of a key's first word.
@@ -199,15 +202,18 @@ enum Tree {
 }
 
 /// What a leaf's entry pair needs.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Leaf {
     area: f32,
     centroid: Vec3,
     point: Vec3,
     normal: Vec3,
-    /// Where the direct light still varies over it when it can be halved no more: points spread over it,
-    /// whose mean is its direct light.
-    spread: Option<[Vec3; SAMPLES_PER_PIECE]>,
+    /// Points spread over it, with the front normals of the triangles they lie on: where its light varies,
+    /// their mean stands for the piece.
+    points: Box<[(Vec3, Vec3); SAMPLES_PER_PIECE]>,
+    /// Whether its direct light still varies over it when it can be halved no more: the mean at `points`
+    /// is its direct light.
+    spread: bool,
 }
 
 /// Every cell of `grid` within the margin of triangle `v`, with the triangle's piece of it.
@@ -292,6 +298,7 @@ pub fn build(
         entries: Vec::new(),
         light_splits: 0,
         spread: Vec::new(),
+        points: Vec::new(),
     };
     let mut own: HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)> = HashMap::new();
     let mut small = Vec::new();
@@ -356,8 +363,9 @@ impl Pieces {
                 let (point, area) = (l.point, l.area);
                 self.entries.push(Entry { point, normal: -l.normal, surface, front: false, area });
                 self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
-                if let Some(points) = l.spread {
-                    self.spread.push((pair, points));
+                self.points.push(*l.points);
+                if l.spread {
+                    self.spread.push((pair, l.points.map(|(p, _)| p)));
                 }
                 pair
             }
@@ -433,7 +441,7 @@ fn split(
 }
 
 /// A leaf's area, centroid, sensor point (its point nearest the centroid) and area-weighted normal.
-fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
+fn leaf(polygons: &[(Polygon, Vec3)], points: Box<[(Vec3, Vec3); SAMPLES_PER_PIECE]>) -> Leaf {
     let (mut area, mut weighted, mut normal) = (0.0, Vec3::ZERO, Vec3::ZERO);
     for (p, n) in polygons {
         let (a, c) = p.area_centroid();
@@ -451,20 +459,20 @@ fn leaf(polygons: &[(Polygon, Vec3)]) -> Leaf {
         .map(|(p, _)| p.closest(centroid))
         .min_by(|a, b| a.distance_squared(centroid).total_cmp(&b.distance_squared(centroid)))
         .unwrap_or(centroid);
-    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1), spread: None }
+    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1), points, spread: false }
 }
 
 /// A leaf, halved along its two longest axes (the second where it is at least half the first) where `light`
 /// says its light varies over it, while that variation's levels ([`Variation`]) go deeper than `depth`, the
 /// halvings made so far.
 fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, depth: u32, min: f32) -> Tree {
-    let mut whole = leaf(&polygons);
-    let Some(varies) = light else { return Tree::Leaf(whole) };
     let (points, normals) = spread(&polygons);
+    let mut whole = leaf(&polygons, Box::new(std::array::from_fn(|k| (points[k], normals[k]))));
+    let Some(varies) = light else { return Tree::Leaf(whole) };
     let variation = varies(&points, &normals, whole.normal);
     let halved = (variation.direct && depth < MAX_LIGHT_LEVELS) || (variation.openness && depth < MAX_OPEN_LEVELS);
     if !halved || whole.area < 4.0 * min {
-        whole.spread = variation.direct.then_some(points);
+        whole.spread = variation.direct;
         return Tree::Leaf(whole);
     }
     let b = Aabb::of(polygons.iter().flat_map(|(p, _)| p.v[..p.len].iter().copied()));

@@ -17,6 +17,7 @@
 pub mod entries;
 pub mod file;
 pub mod grid;
+pub mod piece_mean;
 pub mod polygon;
 pub mod reach;
 pub mod shape;
@@ -82,6 +83,8 @@ pub struct RadianceCache {
     /// Entry pairs whose direct light is the mean over points spread over their piece, and those points
     /// (see [`entries`]).
     pub spread: Vec<(u32, [Vec3; entries::SAMPLES_PER_PIECE])>,
+    /// Per entry pair, points spread over its piece with their front normals ([`piece_mean`]).
+    pub points: Vec<[(Vec3, Vec3); entries::SAMPLES_PER_PIECE]>,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.
     pub surfaces: u32,
 }
@@ -113,6 +116,7 @@ impl RadianceCache {
             keys: keys.len(),
             light_splits: pieces.light_splits,
             spread: pieces.spread,
+            points: pieces.points,
             surfaces: mesh.surfaces.len() as u32,
         }
     }

@@ -16,6 +16,7 @@ use super::{Phase, Progress};
 use crate::gbuffer::GBufferData;
 use crate::gi::RadianceCache;
 use crate::gi::entries::SAMPLES_PER_PIECE;
+use crate::gi::piece_mean::Surroundings;
 use crate::gi::reach::Reach;
 use crate::gi::solve::{Next, Solver};
 use crate::gi::transport::{self, Transport};
@@ -69,6 +70,9 @@ pub struct GiStats {
     /// entry pairs whose direct light is still measured at points spread over them.
     pub light_splits: u64,
     pub spread_pairs: u64,
+    /// Entries moved to their piece's mean light where it differs from their point's (`gi::piece_mean`).
+    #[serde(default)]
+    pub piece_means: u64,
     pub keys: u64,
     pub cache_bytes: u64,
     /// Cells along the scene's longest side, and their size.
@@ -162,7 +166,10 @@ fn spread_by_rays(cache: &RadianceCache, spread: &[(Vec3, usize)], rays: DirectB
         .par_chunks(SAMPLES_PER_PIECE)
         .map(|points| {
             let entry = &cache.entries[points[0].1];
-            let mean = points.iter().map(|&(p, _)| rays(p, entry.normal)).sum::<Vec3>() / points.len() as f32;
+            // Each point facing its own triangle's way: a curved piece's mean normal is not its points'.
+            let side = if entry.front { 1.0 } else { -1.0 };
+            let at = cache.points[points[0].1 / 2];
+            let mean = at.iter().map(|&(p, n)| rays(p, n * side)).sum::<Vec3>() / at.len() as f32;
             (points[0].1, mean - rays(entry.point, entry.normal))
         })
         .collect();
@@ -285,7 +292,7 @@ pub(super) fn solve(
     runners: Runners<'_>,
     (cache, gpu, seeds): (&RadianceCache, &GpuCache, Vec<u32>),
     (bounces, background, transport_budget): (Bounces, Background, u64),
-    rays: Option<DirectByRays<'_>>,
+    (rays, around): (Option<DirectByRays<'_>>, Option<&Surroundings<'_>>),
     progress: &dyn Progress,
 ) -> Result<GiStats> {
     let start = Instant::now();
@@ -357,6 +364,7 @@ pub(super) fn solve(
     let first_seconds = start.elapsed().as_secs_f64();
     // What the last bounce added, as the values buffer holds it (its surface sides' means after it).
     let mut added_values: Vec<Vec3> = Vec::new();
+    let mut piece_means = 0;
     loop {
         let bounce = solver.bounces() + 1;
         if bounce > 1 {
@@ -371,8 +379,22 @@ pub(super) fn solve(
         }
         let next = solver.step(&cache.entries, &cache.albedo, &r);
         // Between bounces what this one added (the next transports it); at the end the estimate.
-        let values =
-            if next == Next::Done { cache.gpu_values(&solver.values()) } else { cache.gpu_values(solver.added()) };
+        let values = match (next, around) {
+            (Next::Done, Some(around)) => {
+                // What the entries' last R saw: the converged cache (a fixed point, its tail in), or with
+                // `--bounces N` the cache before the last bounce (none after the first: R is direct light).
+                let values = solver.values();
+                let seen: Vec<Vec3> = match bounces {
+                    Bounces::Converged => values.clone(),
+                    Bounces::Fixed(_) => values.iter().zip(solver.added()).map(|(v, a)| *v - *a).collect(),
+                };
+                let means = crate::gi::piece_mean::piece_means(cache, (&values, &seen), &reached, around);
+                piece_means = means.1;
+                cache.gpu_values(&means.0)
+            }
+            (Next::Done, None) => cache.gpu_values(&solver.values()),
+            _ => cache.gpu_values(solver.added()),
+        };
         if transport.is_none() || next == Next::Done {
             transfer::write_buffer(device, &gpu.values, &values).context("update the radiance cache")?;
         }
@@ -400,6 +422,7 @@ pub(super) fn solve(
         drawn_triangles,
         light_splits: cache.light_splits as u64,
         spread_pairs: cache.spread.len() as u64,
+        piece_means: piece_means as u64,
         keys: cache.keys as u64,
         cache_bytes: cache.bytes(),
         resolution: cache.resolution,
@@ -474,7 +497,22 @@ impl super::Renderer {
         let points = self.light_points.as_deref().filter(|_| self.estimate.direct_by_rays);
         let rays = points.map(|points| move |p: Vec3, n: Vec3| direct(points, p, n));
         let rays = rays.as_ref().map(|f| f as DirectByRays<'_>);
-        let stats = solve(&self.device, runners, (cache, &self.scene.cache, seeds), light, rays, progress)?;
+        // Where a piece's light varies over it, its mean (`gi::piece_mean`), seen as the sensor maps see it.
+        let sky = self.host.sky.as_ref();
+        let background = move |d: Vec3| match (background, sky) {
+            (Background::Constant(c), _) => c,
+            (Background::SkyMap, Some(sky)) => sky.radiance(d),
+            (Background::SkyMap, None) => Vec3::ZERO,
+        };
+        let around = Surroundings {
+            bvh,
+            triangles: &self.host.mesh.triangles,
+            local: self.host.mesh.local_triangles().len(),
+            offsets: (bias, near),
+            background: &background,
+        };
+        let light_rays = (rays, Some(&around));
+        let stats = solve(&self.device, runners, (cache, &self.scene.cache, seeds), light, light_rays, progress)?;
         self.cache_solved = true;
         Ok(Some(stats))
     }
