@@ -104,7 +104,7 @@ fn luminance(v: Vec4) -> f32 {
 }
 
 /// At rd 32 the slit is about half a texel wide to the dark floor's sensors: pixel by pixel 14.4 % off the
-/// gather with the finer sensors off, 8.8 % with them (the gather's own noise 1.3 %).
+/// gather with the finer sensors off, 8.4 % with them (the gather's own noise 1.3 %).
 #[test]
 fn a_slit_narrower_than_a_texel_is_sensed_again_at_twice_the_rd() {
     let (error, noise, fine) = sensed_against_the_gather(&slit_scene());
