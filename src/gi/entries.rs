@@ -96,17 +96,22 @@ const OPENNESS_RAYS: usize = 16;
 pub fn openness(bvh: &Bvh, (p, n): (Vec3, Vec3), lift: f32, reach: f32) -> f32 {
     let (t, b) = n.any_orthonormal_pair();
     let origin = p + n * lift;
-    let open = (0..OPENNESS_RAYS as u32)
+    let open = (0..OPENNESS_RAYS)
         .filter(|&i| {
-            // Cosine-weighted (Malley): a point of the disc by the golden angle and stratified radius.
-            let u = (i as f32 + 0.5) / OPENNESS_RAYS as f32;
-            let phi = std::f32::consts::TAU * (i as f32 * 0.618_034).fract();
-            let r = u.sqrt();
-            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u).sqrt();
-            !bvh.occluded(&Ray::new(origin, d), 0.0, reach)
+            let d = cosine_direction(i, OPENNESS_RAYS, 0.0);
+            !bvh.occluded(&Ray::new(origin, t * d.x + b * d.y + n * d.z), 0.0, reach)
         })
         .count();
     open as f32 / OPENNESS_RAYS as f32
+}
+
+/// Direction `i` of `count` cosine-weighted about +z (Malley: a point of the disc by the golden angle and
+/// stratified radius), the disc turned by `turn` of a full turn.
+pub fn cosine_direction(i: usize, count: usize, turn: f32) -> Vec3 {
+    let u = (i as f32 + 0.5) / count as f32;
+    let phi = std::f32::consts::TAU * (i as f32 * 0.618_034 + turn).fract();
+    let r = u.sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u).sqrt())
 }
 
 /// Whether the [`openness`] of `points` on one side (`side` 1: the one their front `normals` face, a curved

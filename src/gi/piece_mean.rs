@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::RadianceCache;
-use super::entries::SAMPLES_PER_PIECE;
+use super::entries::{SAMPLES_PER_PIECE, cosine_direction};
 use crate::scene::bvh::Bvh;
 use crate::scene::{Ray, Triangle};
 
@@ -120,17 +120,10 @@ fn gather(
     sum / directions.len() as f32
 }
 
-/// `count` cosine-distributed directions about +z (Malley: the disc by the golden angle and stratified
-/// radius), turned by `turn` of a full turn: each entry its own, so that no direction is every piece's.
+/// `count` cosine-distributed directions about +z ([`cosine_direction`]), turned by `turn` of a full turn:
+/// each entry its own, so that no direction is every piece's.
 fn directions(count: usize, turn: f32) -> Vec<Vec3> {
-    (0..count)
-        .map(|i| {
-            let u = (i as f32 + 0.5) / count as f32;
-            let phi = std::f32::consts::TAU * (i as f32 * 0.618_034 + turn).fract();
-            let r = u.sqrt();
-            Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u).sqrt())
-        })
-        .collect()
+    (0..count).map(|i| cosine_direction(i, count, turn)).collect()
 }
 
 fn luminance(c: Vec3) -> f32 {
