@@ -2,7 +2,10 @@
 //! entry's reflected radiance `Kd·R` beside the path tracer's at the same point and side; the relative RMSE
 //! and bias over the lit entries, all and split by a plane (e.g. the two rooms of the door ajar).
 //! `cargo run --release --example cache_agreement -- SCENE.toml [SAMPLES] [AXIS VALUE]`; `RES=N`: the cache's
-//! cells along the longest side (default 16).
+//! cells along the longest side (default 16); `MEAN=1`: the oracle's mean over each piece's spread points
+//! (what an entry holds where its light varies), not at its sensor's point; `LIT=S`: entries count as lit
+//! above S of the brightest (default 0.001); `DETAIL=SURFACE`: that surface's entries above the plane, the
+//! `TOP=N` (default 20) that weigh most in its bias.
 
 use anyhow::{Context as _, Result};
 use glam::Vec3;
@@ -40,17 +43,28 @@ fn main() -> Result<()> {
     let c = renderer.cache().context("a cache")?;
     let params = EstimatorParams { sensor: SensorKind::Hemicube, indirect: oracle_indirect, background: Vec3::ZERO };
     let oracle = Integrator::new(&scene, params, samples, 3)?;
+    let mean = std::env::var("MEAN").is_ok_and(|m| m == "1");
     let lum = |v: Vec3| v.dot(Vec3::new(0.2126, 0.7152, 0.0722));
     let rows: Vec<(f32, f32, f32, Vec3, u32)> = (c.entries.iter().enumerate())
         .map(|(i, e)| {
-            let r = oracle.radiance(e.point, e.normal, i as u64).mean;
+            // MEAN=1: the oracle's mean over the piece's spread points (what a piece's entry holds).
+            let r = if mean {
+                let side = if e.front { 1.0 } else { -1.0 };
+                let at = &c.points[i / 2];
+                (at.iter().enumerate())
+                    .map(|(k, &(p, n))| oracle.radiance(p, n * side, (i * 8 + k) as u64).mean)
+                    .sum::<Vec3>()
+                    / at.len() as f32
+            } else {
+                oracle.radiance(e.point, e.normal, i as u64).mean
+            };
             (lum(values[i].truncate()), lum(c.albedo[i] * r), e.area, e.point, e.surface)
         })
         .collect();
+    let lit_share: f32 = std::env::var("LIT").ok().and_then(|l| l.parse().ok()).unwrap_or(1e-3);
     let peak = rows.iter().map(|r| r.1).fold(0.0, f32::max);
     let report = |name: &str, keep: &dyn Fn(Vec3) -> bool| {
-        let lit: Vec<_> = rows.iter().filter(|r| r.1 > 1e-3 * peak && keep(r.3)).collect();
-        let _ = &lit;
+        let lit: Vec<_> = rows.iter().filter(|r| r.1 > lit_share * peak && keep(r.3)).collect();
         let rel: Vec<f64> = lit.iter().map(|r| ((r.0 - r.1) / r.1) as f64).collect();
         let rmse = (rel.iter().map(|e| e * e).sum::<f64>() / rel.len().max(1) as f64).sqrt();
         let (a, b) = lit.iter().fold((0.0, 0.0), |(a, b), r| (a + (r.0 * r.2) as f64, b + (r.1 * r.2) as f64));
@@ -65,12 +79,28 @@ fn main() -> Result<()> {
         surfaces.sort_unstable();
         surfaces.dedup();
         for s in surfaces {
-            let lit: Vec<_> = rows.iter().filter(|r| r.4 == s && r.3[axis] >= value && r.1 > 1e-3 * peak).collect();
+            let lit: Vec<_> =
+                rows.iter().filter(|r| r.4 == s && r.3[axis] >= value && r.1 > lit_share * peak).collect();
             if lit.len() < 4 {
                 continue;
             }
             let (a, b) = lit.iter().fold((0.0, 0.0), |(a, b), r| (a + (r.0 * r.2) as f64, b + (r.1 * r.2) as f64));
             println!("  surface {s}: {} entries above, area-weighted bias {:+.4}", lit.len(), a / b - 1.0);
+            if std::env::var("DETAIL").is_ok_and(|d| d == s.to_string()) {
+                let mut worst = lit.clone();
+                worst.sort_by(|x, y| ((y.0 - y.1) * y.2).abs().total_cmp(&((x.0 - x.1) * x.2).abs()));
+                let top = std::env::var("TOP").ok().and_then(|t| t.parse().ok()).unwrap_or(20);
+                for r in worst.iter().take(top) {
+                    println!(
+                        "    at {:.2?}: cache {:.4} oracle {:.4} area {:.4} ({:+.0} %)",
+                        r.3,
+                        r.0,
+                        r.1,
+                        r.2,
+                        100.0 * (r.0 / r.1 - 1.0)
+                    );
+                }
+            }
         }
     }
     Ok(())
