@@ -270,23 +270,32 @@ impl Shared {
             _ => return None,
         };
         s.estimated = true;
-        let seconds = |ratio: f64| first as f64 * ratio * per_sensor;
         if s.measure == Measure::Texels {
             // A bake's texels are known up front: the bar says how long is left as it goes.
             return None;
         }
-        let (low, high) = SENSORS_OVER_FIRST_GRID;
-        (seconds(SENSORS_TYPICAL) > ESTIMATE_ABOVE.as_secs_f64()).then(|| {
-            format!(
-                "estimate: {} to {} (~{:.0} sensors: the first grid's {first} × {low}–{high}, the shipped scenes' \
-                 range) at {:.2} ms a sensor ({source})",
-                duration(seconds(low)),
-                duration(seconds(high)),
-                first as f64 * SENSORS_TYPICAL,
-                per_sensor * 1e3,
-            )
-        })
+        estimate_line(first, s.pixels, per_sensor, source)
     }
+}
+
+/// The estimate said for a render whose first grid senses `first` of its `pixels` at `per_sensor` seconds
+/// each (`source`: how that was measured), when it is long ([`ESTIMATE_ABOVE`]). No pixel is sensed twice:
+/// where the first grid is every pixel (`--tile 1`), or the range reaches them all, the pixels bound it.
+fn estimate_line(first: u64, pixels: u64, per_sensor: f64, source: &str) -> Option<String> {
+    let sensors = |ratio: f64| (first as f64 * ratio).min(pixels.max(first) as f64);
+    let seconds = |ratio: f64| sensors(ratio) * per_sensor;
+    let (low, high) = SENSORS_OVER_FIRST_GRID;
+    let rate = format!("at {:.2} ms a sensor ({source})", per_sensor * 1e3);
+    (seconds(SENSORS_TYPICAL) > ESTIMATE_ABOVE.as_secs_f64()).then(|| match sensors(low) < sensors(high) {
+        true => format!(
+            "estimate: {} to {} (~{:.0} sensors: the first grid's {first} × {low}–{high}, the shipped scenes' range, \
+             at most the {pixels} pixels) {rate}",
+            duration(seconds(low)),
+            duration(seconds(high)),
+            sensors(SENSORS_TYPICAL),
+        ),
+        false => format!("estimate: {} ({:.0} sensors: every pixel) {rate}", duration(seconds(low)), sensors(low)),
+    })
 }
 
 /// `42 s`, `3 min 20 s`.
@@ -410,5 +419,25 @@ impl RenderProgress {
             s.phase = "done";
         }
         self.shared.update(true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_estimate_counts_no_pixel_twice() {
+        // `--tile 1` on 400 × 300: the first grid is every pixel, and so is the whole render.
+        let every = estimate_line(120_000, 120_000, 1e-3, "measured").unwrap();
+        assert!(every.starts_with("estimate: 2 min 0 s (120000 sensors: every pixel)"), "{every}");
+        // Tile 16 on the same image: the shipped scenes' range, below the pixels.
+        let range = estimate_line(480, 120_000, 1e-3, "measured").unwrap();
+        assert!(range.starts_with("estimate: 17 s to 53 s (~28800 sensors"), "{range}");
+        // A first grid whose range passes the pixels: its top stops there.
+        let capped = estimate_line(2_000, 120_000, 1e-3, "measured").unwrap();
+        assert!(capped.starts_with("estimate: 1 min 10 s to 2 min 0 s (~120000 sensors"), "{capped}");
+        // Short renders say nothing.
+        assert_eq!(estimate_line(100, 120_000, 1e-3, "measured"), None);
     }
 }
