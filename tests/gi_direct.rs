@@ -31,9 +31,10 @@ fn the_light_through_the_door_s_gap_reaches_the_cache_as_the_oracle_says() {
             .unwrap();
         renderer.solve_cache(&frame, &Quiet).unwrap().unwrap();
         let cache = renderer.cache().unwrap();
-        ((cache.entries.clone(), cache.spread.clone(), cache.albedo.clone()), renderer.cache_values().unwrap())
+        let spread = cache.spread.iter().map(|&pair| (pair, cache.points[pair as usize].map(|(p, _)| p))).collect();
+        ((cache.entries.clone(), spread, cache.albedo.clone()), renderer.cache_values().unwrap())
     });
-    let (entries, spread, albedo) = cache;
+    let (entries, spread, albedo): (_, Vec<(u32, [Vec3; 8])>, _) = cache;
     let direct = EstimatorParams {
         sensor: SensorKind::Hemicube,
         indirect: Indirect::Bounces(Bounces::Fixed(0)),

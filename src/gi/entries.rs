@@ -174,9 +174,9 @@ pub struct Pieces {
     pub entries: Vec<Entry>,
     /// Of the splits, those that halve a piece where its direct light varies.
     pub light_splits: usize,
-    /// Entry pairs whose direct light is the mean over points spread over their piece (it varies over it
-    /// and it can be halved no more), with those points.
-    pub spread: Vec<(u32, [Vec3; SAMPLES_PER_PIECE])>,
+    /// Entry pairs whose direct light is the mean over the points spread over their piece ([`Pieces::points`]):
+    /// it varies over it and it can be halved no more.
+    pub spread: Vec<u32>,
     /// Per entry pair, points spread over its piece (stratified by area, off its edges), with the front
     /// normals of the triangles they lie on.
     pub points: Vec<[(Vec3, Vec3); SAMPLES_PER_PIECE]>,
@@ -370,7 +370,7 @@ impl Pieces {
                 self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
                 self.points.push(*l.points);
                 if l.spread {
-                    self.spread.push((pair, l.points.map(|(p, _)| p)));
+                    self.spread.push(pair);
                 }
                 pair
             }

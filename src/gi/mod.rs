@@ -80,9 +80,9 @@ pub struct RadianceCache {
     pub keys: usize,
     /// Splits that halve a piece where its direct light varies.
     pub light_splits: usize,
-    /// Entry pairs whose direct light is the mean over points spread over their piece, and those points
-    /// (see [`entries`]).
-    pub spread: Vec<(u32, [Vec3; entries::SAMPLES_PER_PIECE])>,
+    /// Entry pairs whose direct light is the mean over the points spread over their piece, `points` (see
+    /// [`entries`]).
+    pub spread: Vec<u32>,
     /// Per entry pair, points spread over its piece with their front normals ([`piece_mean`]).
     pub points: Vec<[(Vec3, Vec3); entries::SAMPLES_PER_PIECE]>,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.

@@ -138,9 +138,10 @@ fn entry_points(cache: &RadianceCache) -> Vec<(Vec3, usize)> {
 /// mean of the direct light there is that entry's. Eight consecutive points per entry.
 fn spread_points(cache: &RadianceCache, reach: &Reach) -> Vec<(Vec3, usize)> {
     let mut points = Vec::new();
-    for (pair, spread) in &cache.spread {
-        for entry in [2 * *pair as usize, 2 * *pair as usize + 1].into_iter().filter(|&e| reach.is_reached(e)) {
-            points.extend(spread.iter().map(|&p| (p, entry)));
+    for &pair in &cache.spread {
+        let pair = pair as usize;
+        for entry in [2 * pair, 2 * pair + 1].into_iter().filter(|&e| reach.is_reached(e)) {
+            points.extend(cache.points[pair].iter().map(|&(p, _)| (p, entry)));
         }
     }
     points
