@@ -129,6 +129,10 @@ pub fn version_string(v: u32) -> String {
 /// Every physical device the loader reports, in its order, each judged against `requirements`.
 pub fn enumerate(instance: &Instance, requirements: &Requirements) -> Result<Vec<Adapter>> {
     let raw = &instance.raw;
+    // Under the loader's lock too: the first enumeration on an instance is where the loader and the driver
+    // set up their physical devices (lavapipe its screen), as process-wide as a device's creation. A test
+    // that opens devices on 8 threads at once crashed once under load on Mesa 22.3 (not reproduced since).
+    let _loader = super::instance::loader_lock();
     // SAFETY: queries on a valid instance.
     let handles = unsafe { raw.enumerate_physical_devices() }?;
     if handles.is_empty() {
