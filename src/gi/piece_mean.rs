@@ -11,11 +11,10 @@
 //! After the bounces, the light the solved cache sends each point (rays over the values, as the sensor maps
 //! see them) is gathered at the piece's spread points and at its sensor's point, each direction of the
 //! point's paired with one spread point's (so that what both see alike cancels), and the entry moves by its
-//! reflectance times the
-//! difference: the sensor's measure stands, corrected by how far its point's light is from the piece's
-//! mean. [`PROBE_RAYS`] first find the pieces where that difference matters; [`MEAN_RAYS`] then measure it
-//! there. The moved values are not bounced again: they hold a sliver of the light, which others see second
-//! hand.
+//! reflectance times the difference: the sensor's measure stands, corrected by how far its point's light is
+//! from the piece's mean. [`PROBE_RAYS`] first find the pieces where that difference matters; [`MEAN_RAYS`]
+//! then measure it there. The moved values are not bounced again: they hold a sliver of the light, which
+//! others see second hand.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -144,6 +143,7 @@ fn paired_directions(per_point: usize, turn: f32) -> (Vec<Vec3>, [Vec<Vec3>; SAM
     (all, own)
 }
 
+/// Rec. 709 luminance, as `light::groups::luminance` (a layer above `gi`, docs/DESIGN.md §8).
 fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
