@@ -114,6 +114,94 @@ pub fn cosine_direction(i: usize, count: usize, turn: f32) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u).sqrt())
 }
 
+/// Rays that tell whether a point is buried ([`Burial`]), cosine-weighted about its side's normal.
+const BURIAL_RAYS: usize = 16;
+/// A sensor's point stays where at most this share of those rays meets a triangle from behind or too near
+/// (a plinth's open ring sees a quarter of them so, a point at a shaft's foot a third to a half).
+const CLEAR: f32 = 0.125;
+
+/// Where a piece's sensors may not sit: inside a closed shape that stands on it. A fluted shaft on its
+/// plinth is a ring of corrugations, and corrugations split no piece ([`crate::gi::shape`]): the plinth's
+/// top was one piece (halved where its openness varies), and the sensors of its parts inside the shaft saw
+/// only the shaft's inner walls. The walk over what sensors see ([`crate::gi::reach`]) then reached every
+/// flank's inner side: 5 200 of the 40 000-triangle hall's 18 500 cache sensors sensed the inside of its
+/// columns.
+///
+/// A point is open on a side when fewer than half of [`BURIAL_RAYS`] rays from it meet a triangle from
+/// behind (a closed shape's inside) or nearer than the sensors' near plane. On a side
+/// where some of a piece's spread points are open, a part's sensor moves from a point that is not to its
+/// openest spread point, and a part with no open point there is buried: not sensed (its side is seen from
+/// nowhere but through a sliver its points miss, which reads it dark). Where no point of the piece is open on
+/// a side (a room modelled inside out sees its walls from behind everywhere), nothing changes.
+struct Burial<'a> {
+    bvh: &'a Bvh,
+    triangles: &'a [Triangle],
+    /// The sensors' lift and near plane: a surface nearer than that is not in their maps, and what lies
+    /// behind it is (a point at a shaft's foot sees into the shaft), so a ray that meets one counts as
+    /// meeting a triangle from behind.
+    offsets: (f32, f32),
+}
+
+/// Where one side of a part senses ([`Burial::sensor`]).
+enum Sensor {
+    At(Vec3),
+    Buried,
+}
+
+impl Burial<'_> {
+    /// The share of rays from `p` (its side's normal `n`) that meet a triangle from behind or too near.
+    fn behind(&self, p: Vec3, n: Vec3) -> f32 {
+        let (t, b) = n.any_orthonormal_pair();
+        let (lift, near) = self.offsets;
+        let origin = p + n * lift;
+        let behind = (0..BURIAL_RAYS)
+            .filter(|&i| {
+                let d = cosine_direction(i, BURIAL_RAYS, 0.0);
+                let d = t * d.x + b * d.y + n * d.z;
+                self.bvh
+                    .intersect(&Ray::new(origin, d), 0.0, f32::MAX)
+                    .is_some_and(|h| h.t < near || self.triangles[h.triangle as usize].normal.dot(d) > 0.0)
+            })
+            .count();
+        behind as f32 / BURIAL_RAYS as f32
+    }
+
+    /// Whether some of a piece's `spread` points (each with its front normal) are open on its back's and on
+    /// its front's side (`normal`: its mean front normal).
+    fn open_sides(&self, spread: &[(Vec3, Vec3)], normal: Vec3) -> [bool; 2] {
+        [-normal, normal].map(|n| spread.iter().any(|&(p, m)| self.behind(p, facing(m, n)) < 0.5))
+    }
+
+    /// Whether neither `point` nor any of `spread` (with its front normal) is open on side `n`.
+    fn inside(&self, point: Vec3, n: Vec3, spread: &[(Vec3, Vec3)]) -> bool {
+        self.behind(point, n) >= 0.5 && spread.iter().all(|&(p, m)| self.behind(p, facing(m, n)) >= 0.5)
+    }
+
+    /// Where the sensor of a part's side `n` (its mean normal on that side) sits: at `point` where that is
+    /// [`CLEAR`], else at the openest point of `spread` where that is more open, and open; none where no
+    /// point is open.
+    fn sensor(&self, point: Vec3, n: Vec3, spread: &[(Vec3, Vec3)], centroid: Vec3) -> Sensor {
+        let own = self.behind(point, n);
+        if own <= CLEAR {
+            return Sensor::At(point);
+        }
+        // The openest point (one at the shape's foot sees into it), the nearest the centroid of those.
+        let behind = spread.iter().map(|&(p, m)| (p, self.behind(p, facing(m, n))));
+        let key = |&(p, b): &(Vec3, f32)| (b, p.distance_squared(centroid));
+        let openest = behind.min_by(|x, y| key(x).partial_cmp(&key(y)).unwrap()).filter(|&(_, b)| b < own.min(0.5));
+        match openest {
+            Some((p, _)) => Sensor::At(p),
+            None if own < 0.5 => Sensor::At(point),
+            None => Sensor::Buried,
+        }
+    }
+}
+
+/// Front normal `m` turned to the side `n` faces.
+fn facing(m: Vec3, n: Vec3) -> Vec3 {
+    if m.dot(n) >= 0.0 { m } else { -m }
+}
+
 /// Whether the [`openness`] of `points` on one side (`side` 1: the one their front `normals` face, a curved
 /// piece's own at each point; −1 the back) differs by more than [`OPENNESS_VARIATION`], each within half
 /// the points' spread; a step of the measure is added to both ends, so that a closed point beside one open
@@ -180,6 +268,9 @@ pub struct Pieces {
     /// Per entry pair, points spread over its piece (stratified by area, off its edges), with the front
     /// normals of the triangles they lie on.
     pub points: Vec<[(Vec3, Vec3); SAMPLES_PER_PIECE]>,
+    /// Entries whose side of their piece lies inside a closed shape ([`Burial`]): seen from nowhere, never
+    /// sensed. Increasing.
+    pub buried: Vec<u32>,
 }
 
 /// The packed cell of a key's first word.
@@ -211,7 +302,8 @@ enum Tree {
 struct Leaf {
     area: f32,
     centroid: Vec3,
-    point: Vec3,
+    /// Where its sensors sit: the back's, the front's (the point nearest the centroid, unless buried).
+    point: [Vec3; 2],
     normal: Vec3,
     /// Points spread over it, with the front normals of the triangles they lie on: where its light varies,
     /// their mean stands for the piece.
@@ -219,6 +311,8 @@ struct Leaf {
     /// Whether its direct light still varies over it when it can be halved no more: the mean at `points`
     /// is its direct light.
     spread: bool,
+    /// Whether its back's and its front's side lie inside a closed shape ([`Burial`]).
+    buried: [bool; 2],
 }
 
 /// Every cell of `grid` within the margin of triangle `v`, with the triangle's piece of it.
@@ -241,13 +335,14 @@ fn cells_of(grid: &Grid, v: &[Vec3; 3]) -> impl Iterator<Item = (UVec3, Polygon)
 /// Builds the pieces of the mesh's `triangles` on `grid`; `lod`: triangles of coarser levels of detail,
 /// which add aliases only; `light`: where the direct light varies (pieces are halved there); `corrugated`:
 /// per surface id, whether it is a corrugation of a larger shape (`gi::shape`: its pieces are neither split
-/// nor halved, and its planes split no other piece).
+/// nor halved, and its planes split no other piece); `offsets`: the sensors' lift and near plane
+/// (`sensors::frame::offsets`), for where they may sit ([`Burial`]).
 pub fn build(
     grid: &Grid,
     triangles: &[Triangle],
     lod: &[([Vec3; 3], SurfaceId)],
-    light: Option<LightVaries<'_>>,
-    corrugated: &[bool],
+    (light, corrugated): (Option<LightVaries<'_>>, &[bool]),
+    offsets: (f32, f32),
 ) -> Pieces {
     let mut clips: Vec<Clip> = triangles
         .par_iter()
@@ -267,6 +362,8 @@ pub fn build(
     }
 
     let face = grid.cell * grid.cell;
+    let bvh = Bvh::build(triangles);
+    let burial = Burial { bvh: &bvh, triangles, offsets };
     let trees: Vec<Tree> = runs
         .par_iter()
         .enumerate()
@@ -291,12 +388,22 @@ pub fn build(
             } else {
                 split_planes(grid, triangles, cell_runs, (run[0].surface, surface_normal), corrugated)
             };
-            split(polygons, &candidates, MAX_SPLITS, MIN_SPLIT_AREA * face, light)
+            // A closed shape stands on a piece without splitting it only where its sides are corrugations.
+            // A corrugation's side may lie inside its closed shape; a shape whose sides are corrugations
+            // stands on a piece of its cell without splitting it.
+            let rule = if corrugated[run[0].surface as usize] {
+                Some(Rule::Inside)
+            } else {
+                let enclosed =
+                    (cell_runs.iter()).any(|r| r[0].surface != run[0].surface && corrugated[r[0].surface as usize]);
+                enclosed.then_some(Rule::Foot([false; 2]))
+            };
+            let parts = Parts { min: MIN_SPLIT_AREA * face, light, burial: rule.map(|rule| (&burial, rule)) };
+            split(polygons, &candidates, MAX_SPLITS, parts)
         })
         .collect();
 
     // Number the entries and splits; note which unsplit pieces are small enough to alias a neighbour.
-    let bvh = Bvh::build(triangles);
     let mut pieces = Pieces {
         keys: Vec::with_capacity(runs.len()),
         splits: Vec::new(),
@@ -304,6 +411,7 @@ pub fn build(
         light_splits: 0,
         spread: Vec::new(),
         points: Vec::new(),
+        buried: Vec::new(),
     };
     let mut own: HashMap<(u32, SurfaceId), (u32, Vec3, Vec3)> = HashMap::new();
     let mut small = Vec::new();
@@ -315,7 +423,7 @@ pub fn build(
             _ => {
                 references[i] = pieces.number(tree, key.1);
                 if let Tree::Leaf(leaf) = tree {
-                    own.insert(key, (references[i], leaf.point, leaf.normal));
+                    own.insert(key, (references[i], leaf.point[1], leaf.normal));
                 }
             }
         }
@@ -365,13 +473,14 @@ impl Pieces {
         match tree {
             Tree::Leaf(l) => {
                 let pair = (self.entries.len() / 2) as u32;
-                let (point, area) = (l.point, l.area);
-                self.entries.push(Entry { point, normal: -l.normal, surface, front: false, area });
-                self.entries.push(Entry { point, normal: l.normal, surface, front: true, area });
+                let ([back, front], area) = (l.point, l.area);
+                self.entries.push(Entry { point: back, normal: -l.normal, surface, front: false, area });
+                self.entries.push(Entry { point: front, normal: l.normal, surface, front: true, area });
                 self.points.push(*l.points);
                 if l.spread {
                     self.spread.push(pair);
                 }
+                self.buried.extend((0..2).filter(|&side| l.buried[side]).map(|side| 2 * pair + side as u32));
                 pair
             }
             Tree::Split { plane, children, lit } => {
@@ -416,13 +525,7 @@ fn split_planes(
 
 /// `polygons` (each with its triangle's normal) split by the first of `planes` that leaves at least `min`
 /// of area on both sides, then each side by the rest, `depth` levels at most; each part then [`lit`].
-fn split(
-    polygons: Vec<(Polygon, Vec3)>,
-    planes: &[Vec4],
-    depth: u32,
-    min: f32,
-    light: Option<LightVaries<'_>>,
-) -> Tree {
+fn split(polygons: Vec<(Polygon, Vec3)>, planes: &[Vec4], depth: u32, parts: Parts<'_>) -> Tree {
     if depth > 0 {
         for (k, plane) in planes.iter().enumerate() {
             let mut sides: [Vec<(Polygon, Vec3)>; 2] = [Vec::new(), Vec::new()];
@@ -434,19 +537,47 @@ fn split(
                 }
             }
             let area = |s: &[(Polygon, Vec3)]| s.iter().map(|(p, _)| p.area_centroid().0).sum::<f32>();
-            if area(&sides[0]) >= min && area(&sides[1]) >= min {
+            if area(&sides[0]) >= parts.min && area(&sides[1]) >= parts.min {
                 let rest = &planes[k + 1..];
                 let [below, above] = sides;
-                let children = [split(below, rest, depth - 1, min, light), split(above, rest, depth - 1, min, light)];
+                let children = [split(below, rest, depth - 1, parts), split(above, rest, depth - 1, parts)];
                 return Tree::Split { plane: *plane, children: Box::new(children), lit: false };
             }
         }
     }
-    lit(polygons, light, 0, min)
+    lit(polygons, parts, 0)
 }
 
-/// A leaf's area, centroid, sensor point (its point nearest the centroid) and area-weighted normal.
-fn leaf(polygons: &[(Polygon, Vec3)], points: Box<[(Vec3, Vec3); SAMPLES_PER_PIECE]>) -> Leaf {
+/// How a piece is cut into the parts that hold entries, besides the planes that split it.
+#[derive(Clone, Copy)]
+struct Parts<'a> {
+    /// The least area a part keeps.
+    min: f32,
+    /// Where the direct light varies: parts are halved there.
+    light: Option<LightVaries<'a>>,
+    /// Where a closed shape may stand on the piece: its sensors keep out of it, on the sides (back, front)
+    /// where some of the piece is open.
+    burial: Option<(&'a Burial<'a>, Rule)>,
+}
+
+/// How [`Burial`] keeps a piece's sensors out of closed shapes.
+#[derive(Clone, Copy)]
+enum Rule {
+    /// A corrugation: a side of it is buried where none of its points is open (a column's inside, whose
+    /// rays near its ends meet the plinth's top and the capital's bottom from their fronts).
+    Inside,
+    /// A piece a shape may stand on: its sensors move to open points on the sides (back, front) where some
+    /// of the piece is open ([`Burial::sensor`]).
+    Foot([bool; 2]),
+}
+
+/// A leaf's area, centroid, sensor points (its point nearest the centroid, unless `burial` finds it buried
+/// on that side) and area-weighted normal.
+fn leaf(
+    polygons: &[(Polygon, Vec3)],
+    points: Box<[(Vec3, Vec3); SAMPLES_PER_PIECE]>,
+    burial: Option<(&Burial<'_>, Rule)>,
+) -> Leaf {
     let (mut area, mut weighted, mut normal) = (0.0, Vec3::ZERO, Vec3::ZERO);
     for (p, n) in polygons {
         let (a, c) = p.area_centroid();
@@ -464,19 +595,39 @@ fn leaf(polygons: &[(Polygon, Vec3)], points: Box<[(Vec3, Vec3); SAMPLES_PER_PIE
         .map(|(p, _)| p.closest(centroid))
         .min_by(|a, b| a.distance_squared(centroid).total_cmp(&b.distance_squared(centroid)))
         .unwrap_or(centroid);
-    Leaf { area, centroid, point, normal: normal.try_normalize().unwrap_or(polygons[0].1), points, spread: false }
+    let normal = normal.try_normalize().unwrap_or(polygons[0].1);
+    let sides = [-normal, normal].map(|n| match burial {
+        Some((burial, Rule::Foot(open))) if open[(n == normal) as usize] => {
+            burial.sensor(point, n, &points[..], centroid)
+        }
+        Some((burial, Rule::Inside)) if burial.inside(point, n, &points[..]) => Sensor::Buried,
+        _ => Sensor::At(point),
+    });
+    let buried = sides.each_ref().map(|s| matches!(s, Sensor::Buried));
+    let point = sides.map(|s| match s {
+        Sensor::At(p) => p,
+        Sensor::Buried => point,
+    });
+    Leaf { area, centroid, point, normal, points, spread: false, buried }
 }
 
 /// A leaf, halved along its two longest axes (the second where it is at least half the first) where `light`
 /// says its light varies over it, while that variation's levels ([`Variation`]) go deeper than `depth`, the
 /// halvings made so far.
-fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, depth: u32, min: f32) -> Tree {
+fn lit(polygons: Vec<(Polygon, Vec3)>, mut parts: Parts<'_>, depth: u32) -> Tree {
     let (points, normals) = spread(&polygons);
-    let mut whole = leaf(&polygons, Box::new(std::array::from_fn(|k| (points[k], normals[k]))));
-    let Some(varies) = light else { return Tree::Leaf(whole) };
+    let spread_points: Box<[(Vec3, Vec3); SAMPLES_PER_PIECE]> =
+        Box::new(std::array::from_fn(|k| (points[k], normals[k])));
+    if let (0, Some((burial, Rule::Foot(_)))) = (depth, parts.burial) {
+        // The whole piece: the sides on which some of it is open, that its parts keep their sensors to.
+        let normal = normals.iter().sum::<Vec3>().try_normalize().unwrap_or(normals[0]);
+        parts.burial = Some((burial, Rule::Foot(burial.open_sides(&spread_points[..], normal))));
+    }
+    let mut whole = leaf(&polygons, spread_points, parts.burial);
+    let Some(varies) = parts.light else { return Tree::Leaf(whole) };
     let variation = varies(&points, &normals, whole.normal);
     let halved = (variation.direct && depth < MAX_LIGHT_LEVELS) || (variation.openness && depth < MAX_OPEN_LEVELS);
-    if !halved || whole.area < 4.0 * min {
+    if !halved || whole.area < 4.0 * parts.min {
         whole.spread = variation.direct;
         return Tree::Leaf(whole);
     }
@@ -496,18 +647,12 @@ fn lit(polygons: Vec<(Polygon, Vec3)>, light: Option<LightVaries<'_>>, depth: u3
             plane
         })
         .collect();
-    halve(polygons, &planes, light, depth, min)
+    halve(polygons, &planes, parts, depth)
 }
 
 /// `polygons` split by each of `planes` in turn, then each part [`lit`] one level down.
-fn halve(
-    polygons: Vec<(Polygon, Vec3)>,
-    planes: &[Vec4],
-    light: Option<LightVaries<'_>>,
-    depth: u32,
-    min: f32,
-) -> Tree {
-    let Some((plane, rest)) = planes.split_first() else { return lit(polygons, light, depth + 1, min) };
+fn halve(polygons: Vec<(Polygon, Vec3)>, planes: &[Vec4], parts: Parts<'_>, depth: u32) -> Tree {
+    let Some((plane, rest)) = planes.split_first() else { return lit(polygons, parts, depth + 1) };
     let mut sides: [Vec<(Polygon, Vec3)>; 2] = [Vec::new(), Vec::new()];
     for (p, n) in &polygons {
         for (side, part) in p.split(*plane).into_iter().enumerate() {
@@ -517,10 +662,10 @@ fn halve(
         }
     }
     if sides.iter().any(|s| s.is_empty()) {
-        return halve(polygons, rest, light, depth, min);
+        return halve(polygons, rest, parts, depth);
     }
     let [below, above] = sides;
-    let children = [halve(below, rest, light, depth, min), halve(above, rest, light, depth, min)];
+    let children = [halve(below, rest, parts, depth), halve(above, rest, parts, depth)];
     Tree::Split { plane: *plane, children: Box::new(children), lit: true }
 }
 

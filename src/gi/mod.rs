@@ -85,6 +85,8 @@ pub struct RadianceCache {
     pub spread: Vec<u32>,
     /// Per entry pair, points spread over its piece with their front normals ([`piece_mean`]).
     pub points: Vec<[(Vec3, Vec3); entries::SAMPLES_PER_PIECE]>,
+    /// Entries whose side of their piece lies inside a closed shape: never sensed, dark (see [`entries`]).
+    pub buried: Vec<u32>,
     /// Surface ids run 1..=surfaces; each side of each has a fallback value after the entries.
     pub surfaces: u32,
 }
@@ -92,15 +94,22 @@ pub struct RadianceCache {
 impl RadianceCache {
     /// The cache of `mesh` with `resolution` cells along its longest side; `lod`: triangles of coarser levels
     /// of detail the sensor maps may draw instead of the mesh's; `light`: where the direct light varies,
-    /// pieces are halved (see [`entries`]). Distant lights (the sun) have no entries: they reflect nothing,
-    /// and lie outside the grid.
-    pub fn build(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], SurfaceId)], light: Option<LightVaries<'_>>) -> Self {
+    /// pieces are halved; `offsets`: the sensors' lift and near plane (`sensors::frame::offsets`), which keep
+    /// them out of closed shapes (see [`entries`]). Distant lights (the sun) have no entries: they reflect
+    /// nothing, and lie outside the grid.
+    pub fn build(
+        mesh: &Mesh,
+        resolution: u32,
+        lod: &[([Vec3; 3], SurfaceId)],
+        light: Option<LightVaries<'_>>,
+        offsets: (f32, f32),
+    ) -> Self {
         let grid = Grid::new(mesh.bounds, resolution);
         let local = mesh.local_triangles();
         let last_local = local.iter().map(|t| t.surface).max().unwrap_or(0);
         let local_lod: Vec<([Vec3; 3], SurfaceId)> = lod.iter().filter(|(_, s)| *s <= last_local).copied().collect();
         let corrugated = shape::corrugated(mesh, local, grid.cell);
-        let pieces = entries::build(&grid, local, &local_lod, light, &corrugated);
+        let pieces = entries::build(&grid, local, &local_lod, (light, &corrugated), offsets);
         let albedo =
             pieces.entries.iter().map(|e| mesh.surface_albedo(e.surface).min(Vec3::splat(MAX_ALBEDO))).collect();
         let keys: Vec<([u32; 2], u32)> =
@@ -117,6 +126,7 @@ impl RadianceCache {
             light_splits: pieces.light_splits,
             spread: pieces.spread,
             points: pieces.points,
+            buried: pieces.buried,
             surfaces: mesh.surfaces.len() as u32,
         }
     }

@@ -23,7 +23,7 @@ pub const SKY_RAYS: usize = 64;
 /// Where the walk starts: the front entries of emitting surfaces, and where rays that leave the scene carry
 /// light (`sky`: a sky map, a background that is not black, or a distant light such as the sun), every entry
 /// from which one of [`SKY_RAYS`] directions, or the direction of a distant emitter, leaves the scene
-/// (meets none of its own triangles). Increasing.
+/// (meets none of its own triangles); none buried inside a closed shape. Increasing.
 /// `bias`: how far above its surface a sensor sits (where the rays start).
 pub fn seeds(cache: &RadianceCache, mesh: &Mesh, bvh: &Bvh, sky: bool, bias: f32) -> Vec<u32> {
     let local = mesh.local_triangles().len();
@@ -48,6 +48,7 @@ pub fn seeds(cache: &RadianceCache, mesh: &Mesh, bvh: &Bvh, sky: bool, bias: f32
     (cache.entries.par_iter().enumerate())
         .filter(|(_, e)| (e.front && mesh.material_of(e.surface).is_emitter()) || (sky && sees_sky(e)))
         .map(|(i, _)| i as u32)
+        .filter(|i| cache.buried.binary_search(i).is_err())
         .collect()
 }
 
@@ -62,13 +63,17 @@ fn hemisphere(k: usize, n: usize) -> Vec3 {
 /// The walk: which entries are reached, level by level.
 pub struct Reach {
     reached: Vec<bool>,
+    /// Entries the walk never reaches: buried inside closed shapes (`RadianceCache::buried`).
+    closed: Vec<bool>,
     count: usize,
 }
 
 impl Reach {
-    /// Nothing reached yet among `entries`.
-    pub fn new(entries: usize) -> Self {
-        Self { reached: vec![false; entries], count: 0 }
+    /// Nothing reached yet among `entries`, of which `buried` (increasing) are never reached.
+    pub fn new(entries: usize, buried: &[u32]) -> Self {
+        let mut closed = vec![false; entries];
+        buried.iter().for_each(|&i| closed[i as usize] = true);
+        Self { reached: vec![false; entries], closed, count: 0 }
     }
 
     /// Marks `level` reached (entries not reached before: the seeds, then what [`Reach::next`] returned).
@@ -83,8 +88,8 @@ impl Reach {
     /// The entries not yet reached among `seen` (the values the last level's sensors saw; fallbacks, past
     /// the entries, ignored): the next level, increasing.
     pub fn next(&self, seen: impl Iterator<Item = u32>) -> Vec<u32> {
-        let mut next: Vec<u32> =
-            seen.filter(|&c| (c as usize) < self.reached.len() && !self.reached[c as usize]).collect();
+        let open = |c: u32| (c as usize) < self.reached.len() && !self.reached[c as usize] && !self.closed[c as usize];
+        let mut next: Vec<u32> = seen.filter(|&c| open(c)).collect();
         next.sort_unstable();
         next.dedup();
         next
@@ -111,7 +116,7 @@ mod tests {
 
     #[test]
     fn the_walk_follows_rows_to_entries_not_yet_reached() {
-        let mut reach = Reach::new(5);
+        let mut reach = Reach::new(5, &[]);
         reach.mark(&[0]);
         // Entry 0 sees 2 and 3 (and a fallback value, 7, past the entries); 3 sees 0 and 4.
         let rows = [vec![(2, 0.1), (3, 0.2), (7, 0.1)], vec![(0, 0.5), (4, 0.1)]];

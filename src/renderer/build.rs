@@ -218,7 +218,7 @@ impl Renderer {
                 direct: [n, -n].into_iter().any(|n| direct(points, n)),
                 openness: [1.0, -1.0].into_iter().any(|side| openness_varies(&bvh, (points, normals), side, bias)),
             };
-            RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies))
+            RadianceCache::build(&scene.mesh, c.resolution, &lod, Some(&varies), (bias, near))
         });
         if let (Some(c), Some(config)) = (&cache, config.cache) {
             check_cache_size(device, c.bytes(), config.resolution)?;

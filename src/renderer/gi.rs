@@ -311,7 +311,7 @@ pub(super) fn solve(
     // values not yet reached are the next level. With shadow rays, the direct light is theirs and the rows
     // come from the cache's own smaller maps, without zoom views; else both from the render's sensors.
     let runner = if rays.is_some() { &mut *runners.later } else { &mut *runners.first };
-    let mut reach = Reach::new(n);
+    let mut reach = Reach::new(n, &cache.buried);
     let mut rows = Rows::new(n, runner, transport_budget);
     let mut r = vec![Vec3::ZERO; n];
     let mut level = seeds;
