@@ -134,17 +134,16 @@ fn entry_points(cache: &RadianceCache) -> Vec<(Vec3, usize)> {
     cache.entries.iter().enumerate().map(|(i, e)| (e.point, i)).collect()
 }
 
-/// The points spread over each piece whose direct light varies over it, on the sides `reach` reached: the
-/// mean of the direct light there is that entry's. Eight consecutive points per entry.
-fn spread_points(cache: &RadianceCache, reach: &Reach) -> Vec<(Vec3, usize)> {
-    let mut points = Vec::new();
-    for &pair in &cache.spread {
-        let pair = pair as usize;
-        for entry in [2 * pair, 2 * pair + 1].into_iter().filter(|&e| reach.is_reached(e)) {
-            points.extend(cache.points[pair].iter().map(|&(p, _)| (p, entry)));
-        }
-    }
-    points
+/// The entries of the pieces whose direct light varies over them, on the sides `reach` reached: the mean of
+/// the direct light at their piece's spread points is theirs.
+fn spread_entries(cache: &RadianceCache, reach: &Reach) -> Vec<usize> {
+    let sides = |&pair: &u32| [2 * pair as usize, 2 * pair as usize + 1];
+    cache.spread.iter().flat_map(sides).filter(|&e| reach.is_reached(e)).collect()
+}
+
+/// The points spread over the pieces of `entries`, each with its entry: eight consecutive points per entry.
+fn spread_points(cache: &RadianceCache, entries: &[usize]) -> Vec<(Vec3, usize)> {
+    entries.iter().flat_map(|&e| cache.points[e / 2].iter().map(move |&(p, _)| (p, e))).collect()
 }
 
 /// Points on each light group at which an entry whose light hints see only part of the group casts shadow
@@ -162,16 +161,16 @@ pub(super) type DirectByRays<'a> = &'a (dyn Fn(Vec3, Vec3) -> Vec3 + Sync);
 /// much the shadow rays' estimate of the mean differs from theirs at the sensor's own point (a control
 /// variate: where the rays see what the sensor saw, the sensor's measure is kept). Eight sensors a side
 /// cost more than all the other entries on a lamp-lit room; 8 × 64 rays do not.
-fn spread_by_rays(cache: &RadianceCache, spread: &[(Vec3, usize)], rays: DirectByRays<'_>, r: &mut [Vec3]) {
+fn spread_by_rays(cache: &RadianceCache, spread: &[usize], rays: DirectByRays<'_>, r: &mut [Vec3]) {
     let moves: Vec<(usize, Vec3)> = spread
-        .par_chunks(SAMPLES_PER_PIECE)
-        .map(|points| {
-            let entry = &cache.entries[points[0].1];
+        .par_iter()
+        .map(|&i| {
+            let entry = &cache.entries[i];
             // Each point facing its own triangle's way: a curved piece's mean normal is not its points'.
             let side = if entry.front { 1.0 } else { -1.0 };
-            let at = cache.points[points[0].1 / 2];
+            let at = cache.points[i / 2];
             let mean = at.iter().map(|&(p, n)| rays(p, n * side)).sum::<Vec3>() / at.len() as f32;
-            (points[0].1, mean - rays(entry.point, entry.normal))
+            (i, mean - rays(entry.point, entry.normal))
         })
         .collect();
     for (i, m) in moves {
@@ -335,10 +334,11 @@ pub(super) fn solve(
     }
     let drawn_triangles = runner.times.drawn_triangles;
     // Pieces whose direct light varies over them: the mean of the points spread over them.
-    let spread = spread_points(cache, &reach);
-    let spread_sensors = if rays.is_some() { 0 } else { spread.len() };
+    let spread_entries = spread_entries(cache, &reach);
+    let spread = if rays.is_some() { Vec::new() } else { spread_points(cache, &spread_entries) };
+    let spread_sensors = spread.len();
     if let Some(rays) = rays {
-        spread_by_rays(cache, &spread, rays, &mut r);
+        spread_by_rays(cache, &spread_entries, rays, &mut r);
     } else if !spread.is_empty() {
         let direct = CkParams { epsilon: 0.0, background: Background::BLACK, cache: CacheRead::Off };
         let spread_g = points_as_gbuffer(cache, &spread);
