@@ -9,6 +9,11 @@ use sensorlight::gi::RadianceCache;
 use sensorlight::scene::bvh::Bvh;
 use sensorlight::scene::{Mesh, Ray, Scene, Triangle};
 
+/// The cache of `mesh` at `resolution` with coarser levels `lod`, no halving, the renderer's sensor offsets.
+fn cache_of(mesh: &Mesh, resolution: u32, lod: &[([Vec3; 3], u32)]) -> RadianceCache {
+    RadianceCache::build(mesh, resolution, lod, None, sensorlight::sensors::frame::offsets(mesh.scale()))
+}
+
 fn shipped(name: &str) -> Scene {
     Scene::load(&common::project(&format!("scenes/{name}/{name}.toml"))).unwrap()
 }
@@ -33,13 +38,7 @@ fn every_point_of_every_surface_finds_its_own_entry() {
     for name in ["cornell", "room", "door-ajar", "small-light"] {
         let scene = shipped(name);
         for resolution in [4, 16, 33] {
-            let cache = RadianceCache::build(
-                &scene.mesh,
-                resolution,
-                &[],
-                None,
-                sensorlight::sensors::frame::offsets(scene.mesh.scale()),
-            );
+            let cache = cache_of(&scene.mesh, resolution, &[]);
             let mut looked = 0;
             for t in &scene.mesh.triangles {
                 for p in points_on(t) {
@@ -80,13 +79,7 @@ fn no_entry_is_read_across_a_wall() {
         let scene = shipped(name);
         let bvh = Bvh::build(&scene.mesh.triangles);
         for resolution in [8, 16, 32] {
-            let cache = RadianceCache::build(
-                &scene.mesh,
-                resolution,
-                &[],
-                None,
-                sensorlight::sensors::frame::offsets(scene.mesh.scale()),
-            );
+            let cache = cache_of(&scene.mesh, resolution, &[]);
             let lift = 1e-3 * cache.grid.cell;
             let spacing = cache.grid.cell / 8.0;
             let (mut blocked, mut total, mut first) = (0.0, 0.0, None);
@@ -129,8 +122,7 @@ fn no_entry_is_read_across_a_wall() {
 #[test]
 fn entries_sit_on_their_surface_facing_their_side() {
     let scene = shipped("cornell");
-    let cache =
-        RadianceCache::build(&scene.mesh, 16, &[], None, sensorlight::sensors::frame::offsets(scene.mesh.scale()));
+    let cache = cache_of(&scene.mesh, 16, &[]);
     for e in &cache.entries {
         let on = scene.mesh.triangles.iter().filter(|t| t.surface == e.surface).any(|t| {
             let n = t.normal;
@@ -168,8 +160,7 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
         texture_mean: vec![Vec3::ONE],
     };
     for resolution in [1, 2, 7] {
-        let cache =
-            RadianceCache::build(&mesh, resolution, &[], None, sensorlight::sensors::frame::offsets(mesh.scale()));
+        let cache = cache_of(&mesh, resolution, &[]);
         let p = Vec3::new(0.4, 0.6, 0.0);
         let (back, front) = (cache.lookup(p, 1, false), cache.lookup(p, 1, true));
         assert_ne!(back, front);
@@ -180,10 +171,7 @@ fn the_two_sides_of_a_thin_wall_are_apart() {
 #[test]
 fn the_build_is_the_same_on_every_run() {
     let scene = shipped("room");
-    let (a, b) = (
-        RadianceCache::build(&scene.mesh, 24, &[], None, sensorlight::sensors::frame::offsets(scene.mesh.scale())),
-        RadianceCache::build(&scene.mesh, 24, &[], None, sensorlight::sensors::frame::offsets(scene.mesh.scale())),
-    );
+    let (a, b) = (cache_of(&scene.mesh, 24, &[]), cache_of(&scene.mesh, 24, &[]));
     assert_eq!(a.entries.len(), b.entries.len());
     if let Some(i) = (0..a.entries.len()).find(|&i| a.entries[i] != b.entries[i]) {
         panic!("entry {i} differs: {:?} and {:?}", a.entries[i], b.entries[i]);
@@ -197,12 +185,10 @@ fn the_build_is_the_same_on_every_run() {
 fn coarser_levels_read_their_surface_nearby() {
     let scene = shipped("cornell");
     let floor = scene.mesh.triangles.iter().find(|t| t.normal.y > 0.99 && t.v.iter().all(|v| v.y < 1.0)).unwrap();
-    let grid =
-        RadianceCache::build(&scene.mesh, 16, &[], None, sensorlight::sensors::frame::offsets(scene.mesh.scale())).grid;
+    let grid = cache_of(&scene.mesh, 16, &[]).grid;
     let shift = Vec3::new(0.3, -0.6, 0.2) * grid.cell;
     let lod = [(floor.v.map(|v| v + shift), floor.surface)];
-    let cache =
-        RadianceCache::build(&scene.mesh, 16, &lod, None, sensorlight::sensors::frame::offsets(scene.mesh.scale()));
+    let cache = cache_of(&scene.mesh, 16, &lod);
     let p = (floor.v[0] + floor.v[1] + floor.v[2]) / 3.0 + shift;
     let i = cache.lookup(p, floor.surface, true);
     assert!(i < cache.entries.len(), "a lower floor falls back");

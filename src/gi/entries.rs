@@ -388,7 +388,6 @@ pub fn build(
             } else {
                 split_planes(grid, triangles, cell_runs, (run[0].surface, surface_normal), corrugated)
             };
-            // A closed shape stands on a piece without splitting it only where its sides are corrugations.
             // A corrugation's side may lie inside its closed shape; a shape whose sides are corrugations
             // stands on a piece of its cell without splitting it.
             let rule = if corrugated[run[0].surface as usize] {
