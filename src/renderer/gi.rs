@@ -491,6 +491,7 @@ impl super::Renderer {
             let share = |(group, &g): (usize, &u64)| match ((facing & g).count_ones(), (seen & g).count_ones()) {
                 (0, _) => 1.0,
                 (f, s) if s == f => 1.0,
+                (_, 0) => shadow.share_if_seen(bvh, (p, n), (bias, near), group).unwrap_or(0.0),
                 _ => shadow.share(bvh, (p, n), (bias, near), group).unwrap_or(0.0),
             };
             bits.iter().enumerate().zip(e).map(|(g, e)| e * share(g)).sum::<Vec3>() / std::f32::consts::PI
