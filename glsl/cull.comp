@@ -152,7 +152,12 @@ void main() {
                     commands[command] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
                     if (push.region > 0u) {
                         uint at = atomicAdd(kept_dispatch.x, 1u);
-                        kept[at] = command;
+                        // passes::cull::back_hidden: the eye outside a closed part, by more than the near plane.
+                        bool closed = (k.flags & CLUSTER_CLOSED) != 0u;
+                        vec3 margin = vec3(push.near);
+                        bool outside = any(lessThan(eye, k.part_min.xyz - margin))
+                            || any(greaterThan(eye, k.part_max.xyz + margin));
+                        kept[at] = command | (closed && outside ? KEPT_BACK_HIDDEN : 0u);
                         atomicMax(kept_dispatch.y, min(at / TRIANGLE_GROUP + 1u, MAX_WORKGROUPS));
                     }
                 }

@@ -5,7 +5,9 @@
 // view's region of the slot's index pool, drawn by the view's one command, and the cluster's command
 // draws nothing. Where the region is full the cluster's command keeps it whole.
 // Step 1, one invocation per view: its cluster list is drawn only where a cluster was left whole.
-// CPU twin: passes::cull_triangles::may_cover.
+// A cluster whose entry carries KEPT_BACK_HIDDEN (its closed part seen from outside: cull.comp) also drops
+// the triangles that turn their backs to the eye, which its front faces hide.
+// CPU twin: passes::cull_triangles::{may_cover, faces}.
 #include "types.glsl"
 
 // One invocation per cluster, which tests its triangles in turn: on a CPU rasterizer a workgroup barrier
@@ -75,6 +77,11 @@ bool may_cover(GpuSensorView view, vec3 p0, vec3 p1, vec3 p2) {
     return holds_centre(lo.x, hi.x) && holds_centre(lo.y, hi.y);
 }
 
+// cull_triangles::faces: whether the triangle turns its front (counter-clockwise) towards `eye`.
+bool faces(vec3 eye, vec3 p0, vec3 p1, vec3 p2) {
+    return dot(cross(p1 - p0, p2 - p0), eye - p0) > 0.0;
+}
+
 // Step 1: a view's cluster list draws where a cluster was left whole; its walk's count kept for the host.
 void finish() {
     uint v = gl_GlobalInvocationID.x;
@@ -96,7 +103,8 @@ void main() {
     uint n_views = push.views;
     uint total = kept_dispatch.x;
     for (uint k = gl_GlobalInvocationID.x; k < total; k += gl_NumWorkGroups.x * GROUP) {
-        uint command = kept[k];
+        uint command = kept[k] & ~KEPT_BACK_HIDDEN;
+        bool back_hidden = (kept[k] & KEPT_BACK_HIDDEN) != 0u;
         uint v = command / push.max_per_view;
         GpuSensorView view = views[v];
         GpuDrawCommand draw = commands[command];
@@ -111,7 +119,7 @@ void main() {
             vec3 p0 = vertices[indices[first]].xyz;
             vec3 p1 = vertices[indices[first + 1u]].xyz;
             vec3 p2 = vertices[indices[first + 2u]].xyz;
-            if (may_cover(view, p0, p1, p2)) {
+            if ((!back_hidden || faces(view.eye.xyz, p0, p1, p2)) && may_cover(view, p0, p1, p2)) {
                 keep[t >> 5u] |= 1u << (t & 31u);
                 survivors++;
             }

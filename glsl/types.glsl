@@ -265,8 +265,10 @@ struct GpuCluster {
     vec4 parent_max;
     uint first_index;
     uint index_count;
-    uint flags;  // CLUSTER_EMITTER
+    uint flags;  // CLUSTER_EMITTER | CLUSTER_CLOSED
     uint _pad;
+    vec4 part_min;  // the box of its whole part (xyz); outside it a closed part hides its back faces
+    vec4 part_max;
 };
 
 // One node of the clusters' bounding tree (clusters::TreeNode flattened).
@@ -284,6 +286,9 @@ struct GpuCullNode {
 
 const uint CLUSTER_EMITTER = 1u;
 const uint NODE_LEAF = 2u;
+const uint CLUSTER_CLOSED = 4u;
+// A kept command's entry (cull.comp → cull_triangles.comp): the eye is outside its closed part.
+const uint KEPT_BACK_HIDDEN = 0x80000000u;
 
 // VkDrawIndexedIndirectCommand.
 struct GpuDrawCommand {

@@ -12,8 +12,8 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::clusters::{ClusterMesh, CullTree, ErrorBounds, max_selected};
 use crate::gi::RadianceCache;
 use crate::gpu_types::{
-    CLUSTER_EMITTER, EMITTER_CHUNK, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode, GpuEmitter,
-    GpuEmitterChunk, GpuLightGroup, GpuSky, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
+    CLUSTER_CLOSED, CLUSTER_EMITTER, EMITTER_CHUNK, GpuCacheGrid, GpuCacheSlot, GpuCacheSplit, GpuCluster, GpuCullNode,
+    GpuEmitter, GpuEmitterChunk, GpuLightGroup, GpuSky, GpuSurface, GpuTexture, MAX_GROUPS, NODE_LEAF, Vertex,
 };
 use crate::light::groups::{self, Lights};
 use crate::scene::{Aabb, Mesh, Scene, SkyMap, Texture};
@@ -188,8 +188,11 @@ pub fn gpu_clusters(clusters: &ClusterMesh, emitter: impl Fn(u32) -> bool) -> Ve
                 parent_max,
                 first_index: k.first_index,
                 index_count: k.index_count,
-                flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 },
+                flags: if emitter(k.surface) { CLUSTER_EMITTER } else { 0 }
+                    | if k.closed != 0 { CLUSTER_CLOSED } else { 0 },
                 _pad: 0,
+                part_min: Vec3::from(k.part_min).extend(0.0),
+                part_max: Vec3::from(k.part_max).extend(0.0),
             }
         })
         .collect()

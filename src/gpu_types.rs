@@ -482,15 +482,24 @@ pub struct GpuCluster {
     pub parent_max: Vec4,
     pub first_index: u32,
     pub index_count: u32,
-    /// [`CLUSTER_EMITTER`] or 0.
+    /// [`CLUSTER_EMITTER`], [`CLUSTER_CLOSED`], or 0.
     pub flags: u32,
     pub _pad: u32,
+    /// The box of its whole part (xyz of min and max; w unused): from outside it (and the near plane's
+    /// distance) a [`CLUSTER_CLOSED`] part shows none of its back faces.
+    pub part_min: Vec4,
+    pub part_max: Vec4,
 }
 
 /// A cluster of an emitter (of a node: with an emitter below): the only ones an emitters-only view keeps.
 pub const CLUSTER_EMITTER: u32 = 1;
 /// A node whose children are clusters (`GpuCullNode::first` indexes the leaf items).
 pub const NODE_LEAF: u32 = 2;
+/// A cluster of a part that is closed and faces outwards (`clusters::closed`).
+pub const CLUSTER_CLOSED: u32 = 4;
+/// Set in a kept command's entry (`passes::cull_triangles`) where the view's eye is outside the cluster's
+/// closed part: the triangle pass drops its back faces.
+pub const KEPT_BACK_HIDDEN: u32 = 1 << 31;
 
 /// One node of the clusters' bounding tree as the culling pass reads it (`crate::clusters::TreeNode`
 /// flattened; the same shape as [`GpuCluster`]).

@@ -405,3 +405,39 @@ fn a_small_part_has_simpler_levels_each_closed() {
         c.clusters.iter().filter(|k| mesh.surfaces[k.surface as usize - 1].name.starts_with("lamp")).collect();
     assert!(lamp.len() == 1 && lamp[0].is_full_detail() && lamp[0].parent.error == f32::MAX, "{lamp:?}");
 }
+
+/// Which of the hall's parts hide their back faces from outside (`clusters::closed`): its boxes, pedestals
+/// and spheres are closed and face out; its shafts are open tubes and its shell faces in, so their back
+/// faces may show. Each cluster carries its part's box, holding all of the part's clusters.
+#[test]
+fn the_hall_s_closed_parts_are_its_boxes_and_spheres() {
+    let scene = common::hall::hall(16, 8, (32, 24));
+    let mesh = &scene.mesh;
+    let c = clusters::build(mesh);
+    let group = |k: &Cluster| mesh.surfaces[k.surface as usize - 1].name.split('/').next().unwrap().to_owned();
+    let mut closed: HashMap<String, (usize, usize)> = HashMap::new();
+    for k in &c.clusters {
+        let entry = closed.entry(group(k)).or_default();
+        if k.closed != 0 {
+            entry.0 += 1;
+        } else {
+            entry.1 += 1;
+        }
+        let part = Aabb { min: Vec3::from(k.part_min), max: Vec3::from(k.part_max) };
+        for v in c.triangles_of(k).flatten() {
+            let p = Vec3::from(c.positions[v as usize]);
+            assert!(
+                p.cmpge(part.min).all() && p.cmple(part.max).all(),
+                "{}: a corner outside its part's box",
+                group(k)
+            );
+        }
+    }
+    eprintln!("(closed, open) clusters by group: {closed:?}");
+    for name in ["boxes", "pedestals", "spheres"] {
+        assert!(closed[name].0 > 0 && closed[name].1 == 0, "{name}: {:?} clusters (closed, open)", closed[name]);
+    }
+    for name in ["columns", "shell", "panels"] {
+        assert!(closed[name].0 == 0 && closed[name].1 > 0, "{name}: {:?} clusters (closed, open)", closed[name]);
+    }
+}

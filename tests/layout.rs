@@ -124,7 +124,9 @@ fn shared_structs_match_glsl() {
                 first_index,
                 index_count,
                 flags,
-                _pad
+                _pad,
+                part_min,
+                part_max
             ),
         ),
         (
@@ -238,7 +240,7 @@ fn glsl_constants() -> HashMap<String, u64> {
 fn shared_constants_match_glsl() {
     use sensorlight::gpu_types as g;
     let glsl = glsl_constants();
-    let rust: [(&str, u64); 10] = [
+    let rust: [(&str, u64); 12] = [
         ("VIEW_EMITTERS_ONLY", g::VIEW_EMITTERS_ONLY as u64),
         ("VIEW_ZOOM", g::VIEW_ZOOM as u64),
         ("MAX_GROUPS", g::MAX_GROUPS as u64),
@@ -249,6 +251,8 @@ fn shared_constants_match_glsl() {
         ("NO_SURFACE", sensorlight::scene::NO_SURFACE as u64),
         ("CLUSTER_EMITTER", g::CLUSTER_EMITTER as u64),
         ("NODE_LEAF", g::NODE_LEAF as u64),
+        ("CLUSTER_CLOSED", g::CLUSTER_CLOSED as u64),
+        ("KEPT_BACK_HIDDEN", g::KEPT_BACK_HIDDEN as u64),
     ];
     for (name, value) in rust {
         assert_eq!(glsl.get(name), Some(&value), "{name}: glsl/types.glsl against Rust");

@@ -26,13 +26,14 @@ use glam::Vec3;
 use meshopt::{ClodMesh, SimplifyOptions, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
 use rayon::prelude::*;
 
+use super::closed::closed_outward;
 use super::weld::{Look, PartTriangle, Welded};
 use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
 use crate::scene::surfaces::{FxBuild, weld};
 use crate::scene::{Aabb, Mesh, closest_on_triangle};
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
-pub const BUILD_VERSION: u32 = 8;
+pub const BUILD_VERSION: u32 = 9;
 /// Triangles per cluster at most (and vertices: meshoptimizer's default for rasterisation).
 pub const MAX_TRIANGLES: usize = 128;
 /// A part's levels beyond `clod_build`'s have at most this fraction of the previous level's triangles
@@ -89,6 +90,13 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
             let mut part = part_clusters(&triangles, surfaces[0], lod, &look);
             if !emitter {
                 part.vanish_when_small();
+            }
+            // Back faces hidden from outside: closed, facing out, and nowhere cut out (a hole shows them).
+            let cut = surfaces.iter().any(|&s| mesh.material_of(s).cutout.is_some());
+            let closed = !cut && closed_outward(triangles.iter().map(|t| t.0));
+            let bounds = Aabb::of(triangles.iter().flat_map(|t| t.0.iter().copied()));
+            for c in &mut part.clusters {
+                (c.closed, c.part_min, c.part_max) = (closed as u32, bounds.min.into(), bounds.max.into());
             }
             part
         })
@@ -397,7 +405,7 @@ impl Part {
             slab: slab(corners, Vec3::from_slice(&sphere[..3])),
             own,
             parent,
-            _pad: [0; 2],
+            ..Default::default()
         });
         self.indices.extend_from_slice(indices);
     }

@@ -17,6 +17,7 @@
 
 pub mod build;
 pub mod cache;
+pub mod closed;
 pub mod select;
 pub mod tree;
 mod weld;
@@ -78,7 +79,13 @@ pub struct Cluster {
     pub own: ErrorBounds,
     /// The bound of the geometry that replaces it (error `f32::MAX`: nothing does).
     pub parent: ErrorBounds,
-    pub _pad: [u32; 2],
+    /// 1 where its part is closed and faces outwards ([`closed::closed_outward`]): an eye outside the
+    /// part's box sees none of its back faces. 0 otherwise.
+    pub closed: u32,
+    pub _pad: u32,
+    /// The box of its whole part (every level), inside which an eye may see the part's back faces.
+    pub part_min: [f32; 3],
+    pub part_max: [f32; 3],
 }
 
 impl Cluster {

@@ -35,7 +35,9 @@ use glam::{Mat4, Vec3, Vec4, Vec4Swizzles as _};
 use super::cull_triangles::{CullTriangles, TriangleBindings};
 use crate::clusters;
 use crate::gpu_scene::{TreeShape, bounds_from_gpu};
-use crate::gpu_types::{CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY};
+use crate::gpu_types::{
+    CLUSTER_CLOSED, CLUSTER_EMITTER, CullPush, GpuCluster, GpuSensor, GpuSensorView, VIEW_EMITTERS_ONLY,
+};
 use crate::shaders;
 use crate::vk::{Access, Buffer, ComputeKernel, Device, Encoder, barrier, compute::groups_for};
 
@@ -183,6 +185,15 @@ pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd:
         && clusters::reach(cluster.sphere.into(), cluster.slab.into(), n) >= n.dot(eye)
         && clusters::projected_error(&bounds_from_gpu(cluster.own_min, cluster.own_max), eye, near) <= tau
         && clusters::projected_error(&bounds_from_gpu(cluster.parent_min, cluster.parent_max), eye, near) > tau
+}
+
+/// The CPU twin of what `glsl/cull.comp` marks a kept cluster with (`KEPT_BACK_HIDDEN`): its part is closed
+/// and faces outwards, and the sensor's eye lies outside the part's box by more than the near plane's
+/// distance, so no back face of it can show (none is clipped open by the near plane either).
+pub fn back_hidden(cluster: &GpuCluster, sensor: &GpuSensor, near: f32) -> bool {
+    let (eye, margin) = (sensor.origin.xyz(), Vec3::splat(near));
+    let outside = eye.cmplt(cluster.part_min.xyz() - margin).any() || eye.cmpgt(cluster.part_max.xyz() + margin).any();
+    cluster.flags & CLUSTER_CLOSED != 0 && outside
 }
 
 /// Whether `view` may see anything within `sphere` (of something flagged `flags`): not wholly behind the

@@ -13,6 +13,9 @@
 //! the slot's index pool (`DrawLists::pool`); each view then draws its region with one command, and its
 //! cluster list only where a cluster did not fit the region (kept whole: slower, never wrong). On
 //! lavapipe every draw costs its own setup: a view drew a dozen clusters.
+//!
+//! A cluster of a closed part seen from outside also drops its back faces (`clusters::closed`): hidden
+//! behind the part's front faces, they were half the triangles a sensor drew in the hall of columns.
 
 use std::sync::Arc;
 
@@ -113,6 +116,14 @@ pub fn may_cover(view: &GpuSensorView, rd: u32, p: [Vec3; 3]) -> bool {
     let lo = window[0].min(window[1]).min(window[2]);
     let hi = window[0].max(window[1]).max(window[2]);
     holds_centre(lo.x, hi.x) && holds_centre(lo.y, hi.y)
+}
+
+/// Whether the triangle with world-space corners `p` turns its front (counter-clockwise) towards `eye`. Where
+/// the culling pass marked a cluster's closed part as seen from outside (`passes::cull::back_hidden`), the
+/// triangles that do not are dropped: the part's front faces hide them. The twin of
+/// `glsl/cull_triangles.comp`'s `faces`.
+pub fn faces(eye: Vec3, p: [Vec3; 3]) -> bool {
+    (p[1] - p[0]).cross(p[2] - p[0]).dot(eye - p[0]) > 0.0
 }
 
 /// Whether `[lo, hi]` (window coordinates, widened by [`COVER_SLACK`]) holds a texel centre `k + 0.5`.
