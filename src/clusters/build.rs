@@ -26,14 +26,14 @@ use glam::Vec3;
 use meshopt::{ClodMesh, SimplifyOptions, VertexDataAdapter, clod_build, clod_default_config, typed_to_bytes};
 use rayon::prelude::*;
 
-use super::closed::closed_outward;
+use super::closed::{PartShape, hiding_boxes};
 use super::weld::{Look, PartTriangle, Welded};
 use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
 use crate::scene::surfaces::{FxBuild, weld};
 use crate::scene::{Aabb, Mesh, closest_on_triangle};
 
 /// Bumped whenever the output of [`build`] changes: cached hierarchies of another version are rebuilt.
-pub const BUILD_VERSION: u32 = 9;
+pub const BUILD_VERSION: u32 = 10;
 /// Triangles per cluster at most (and vertices: meshoptimizer's default for rasterisation).
 pub const MAX_TRIANGLES: usize = 128;
 /// A part's levels beyond `clod_build`'s have at most this fraction of the previous level's triangles
@@ -74,9 +74,22 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
     let look: Vec<Look> = std::iter::once((usize::MAX, [0; 3]))
         .chain(mesh.surfaces.iter().zip(&mesh.texture_mean).map(|(s, m)| (s.material, m.to_array().map(f32::to_bits))))
         .collect();
-    let parts: Vec<Part> = connected_parts(mesh)
+    let connected = connected_parts(mesh);
+    // Where each part hides its back faces from (`closed`): closed, or capped by closed parts.
+    let shapes: Vec<PartShape> = connected
         .par_iter()
-        .map(|surfaces| {
+        .map(|surfaces| PartShape {
+            triangles: surfaces
+                .iter()
+                .flat_map(|&s| by_surface[s as usize].iter().map(|&i| mesh.triangles[i].v))
+                .collect(),
+            cut: surfaces.iter().any(|&s| mesh.material_of(s).cutout.is_some()),
+        })
+        .collect();
+    let hiding = hiding_boxes(&shapes);
+    drop(shapes);
+    let parts: Vec<Part> = (connected.par_iter().zip(&hiding))
+        .map(|(surfaces, hiding)| {
             let triangles: Vec<PartTriangle> = surfaces
                 .iter()
                 .flat_map(|&s| by_surface[s as usize].iter().map(move |&i| (&mesh.triangles[i].v, s, mesh.uvs.get(i))))
@@ -91,12 +104,10 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
             if !emitter {
                 part.vanish_when_small();
             }
-            // Back faces hidden from outside: closed, facing out, and nowhere cut out (a hole shows them).
-            let cut = surfaces.iter().any(|&s| mesh.material_of(s).cutout.is_some());
-            let closed = !cut && closed_outward(triangles.iter().map(|t| t.0));
-            let bounds = Aabb::of(triangles.iter().flat_map(|t| t.0.iter().copied()));
-            for c in &mut part.clusters {
-                (c.closed, c.part_min, c.part_max) = (closed as u32, bounds.min.into(), bounds.max.into());
+            if let Some(b) = hiding {
+                for c in &mut part.clusters {
+                    (c.closed, c.part_min, c.part_max) = (1, b.min.into(), b.max.into());
+                }
             }
             part
         })

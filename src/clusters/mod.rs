@@ -79,11 +79,12 @@ pub struct Cluster {
     pub own: ErrorBounds,
     /// The bound of the geometry that replaces it (error `f32::MAX`: nothing does).
     pub parent: ErrorBounds,
-    /// 1 where its part is closed and faces outwards ([`closed::closed_outward`]): an eye outside the
-    /// part's box sees none of its back faces. 0 otherwise.
+    /// 1 where an eye outside `part_min`..`part_max` sees none of its part's back faces: the part is closed
+    /// and faces outwards, or closed parts cap its rims ([`closed::hiding_boxes`]). 0 otherwise.
     pub closed: u32,
     pub _pad: u32,
-    /// The box of its whole part (every level), inside which an eye may see the part's back faces.
+    /// The box of its whole part (every level) and of the parts capping it: inside, an eye may see the
+    /// part's back faces.
     pub part_min: [f32; 3],
     pub part_max: [f32; 3],
 }
