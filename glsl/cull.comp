@@ -152,7 +152,8 @@ void main() {
                     commands[command] = GpuDrawCommand(k.index_count, 1u, k.first_index, 0, v);
                     if (push.region > 0u) {
                         uint at = atomicAdd(kept_dispatch.x, 1u);
-                        // passes::cull::back_hidden: the eye outside a closed part, by more than the near plane.
+                        // passes::cull::back_hidden: the eye outside the box of a part that hides its back faces
+                        // (closed, or capped), by more than the near plane.
                         bool closed = (k.flags & CLUSTER_CLOSED) != 0u;
                         vec3 margin = vec3(push.near);
                         bool outside = any(lessThan(eye, k.part_min.xyz - margin))

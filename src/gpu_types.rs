@@ -485,8 +485,8 @@ pub struct GpuCluster {
     /// [`CLUSTER_EMITTER`], [`CLUSTER_CLOSED`], or 0.
     pub flags: u32,
     pub _pad: u32,
-    /// The box of its whole part (xyz of min and max; w unused): from outside it (and the near plane's
-    /// distance) a [`CLUSTER_CLOSED`] part shows none of its back faces.
+    /// The box of its whole part and of the parts capping it (xyz of min and max; w unused): from outside
+    /// it (and the near plane's distance) a [`CLUSTER_CLOSED`] part shows none of its back faces.
     pub part_min: Vec4,
     pub part_max: Vec4,
 }
@@ -495,7 +495,8 @@ pub struct GpuCluster {
 pub const CLUSTER_EMITTER: u32 = 1;
 /// A node whose children are clusters (`GpuCullNode::first` indexes the leaf items).
 pub const NODE_LEAF: u32 = 2;
-/// A cluster of a part that is closed and faces outwards (`clusters::closed`).
+/// A cluster of a part that hides its back faces from outside `GpuCluster::part_min`..`part_max`: closed
+/// and facing out, or capped by closed parts (`clusters::closed`).
 pub const CLUSTER_CLOSED: u32 = 4;
 /// Set in a kept command's entry (`passes::cull_triangles`) where the view's eye is outside the cluster's
 /// closed part: the triangle pass drops its back faces.

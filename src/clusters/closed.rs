@@ -20,9 +20,9 @@ pub struct PartShape {
 }
 
 /// For each part, the box outside which none of its back faces can be seen, or `None` where some may be:
-/// its own box where it is closed and faces out ([`closed_outward`]); where its only open edges are rims
-/// that closed parts' faces cap ([`caps`]), the box of it and of those parts (from inside them their
-/// caps' backs show). Regular simplification keeps a closed surface closed and leaves rims where they are
+/// its own box where it is closed and faces out ([`Edges::closed_outward`]); where its only open edges
+/// are rims that closed parts' faces cap ([`caps`]), the box of it and of those parts (from inside them
+/// their caps' backs show). Regular simplification keeps a closed surface closed and leaves rims where they are
 /// (its open borders are locked), so every level of detail of such a part hides its back faces too.
 pub fn hiding_boxes(parts: &[PartShape]) -> Vec<Option<Aabb>> {
     let edges: Vec<Edges> = parts.iter().map(|p| Edges::of(&p.triangles)).collect();
@@ -40,12 +40,6 @@ pub fn hiding_boxes(parts: &[PartShape]) -> Vec<Option<Aabb>> {
             Some(cappers.into_iter().fold(boxes[i], |b, q| b.union(boxes[q])))
         })
         .collect()
-}
-
-/// Whether `triangles` close a volume and face out of it ([`Edges::closed_outward`]).
-pub fn closed_outward<'a>(triangles: impl IntoIterator<Item = &'a [Vec3; 3]>) -> bool {
-    let triangles: Vec<[Vec3; 3]> = triangles.into_iter().copied().collect();
-    Edges::of(&triangles).closed_outward()
 }
 
 /// A part's edges, its corners welded where their positions are equal (triangles with two equal corners
@@ -251,6 +245,10 @@ mod tests {
                 [[a, d, c], [a, c, b]]
             })
             .collect()
+    }
+
+    fn closed_outward(triangles: &[[Vec3; 3]]) -> bool {
+        Edges::of(triangles).closed_outward()
     }
 
     fn boxes(parts: Vec<Vec<[Vec3; 3]>>) -> Vec<Option<Aabb>> {

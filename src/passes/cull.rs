@@ -187,9 +187,10 @@ pub fn keeps(cluster: &GpuCluster, view: &GpuSensorView, sensor: &GpuSensor, rd:
         && clusters::projected_error(&bounds_from_gpu(cluster.parent_min, cluster.parent_max), eye, near) > tau
 }
 
-/// The CPU twin of what `glsl/cull.comp` marks a kept cluster with (`KEPT_BACK_HIDDEN`): its part is closed
-/// and faces outwards, and the sensor's eye lies outside the part's box by more than the near plane's
-/// distance, so no back face of it can show (none is clipped open by the near plane either).
+/// The CPU twin of what `glsl/cull.comp` marks a kept cluster with (`KEPT_BACK_HIDDEN`): its part hides its
+/// back faces from outside its box (closed, or capped by closed parts: `clusters::closed`), and the
+/// sensor's eye lies outside that box by more than the near plane's distance, so no back face of it can
+/// show (none is clipped open by the near plane either).
 pub fn back_hidden(cluster: &GpuCluster, sensor: &GpuSensor, near: f32) -> bool {
     let (eye, margin) = (sensor.origin.xyz(), Vec3::splat(near));
     let outside = eye.cmplt(cluster.part_min.xyz() - margin).any() || eye.cmpgt(cluster.part_max.xyz() + margin).any();
