@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 use super::closed::{PartShape, hiding_boxes};
 use super::weld::{Look, PartTriangle, Welded};
-use super::{Cluster, ClusterMesh, ErrorBounds, slab, sphere};
+use super::{Cluster, ClusterMesh, ErrorBounds, join, root, slab, sphere};
 use crate::scene::surfaces::{FxBuild, weld};
 use crate::scene::{Aabb, Mesh, closest_on_triangle};
 
@@ -129,13 +129,6 @@ pub fn build(mesh: &Mesh) -> ClusterMesh {
 fn connected_parts(mesh: &Mesh) -> Vec<Vec<u32>> {
     let surfaces = mesh.surfaces.len();
     let mut parent: Vec<u32> = (0..=surfaces as u32).collect();
-    fn root(parent: &mut [u32], mut s: u32) -> u32 {
-        while parent[s as usize] != s {
-            parent[s as usize] = parent[parent[s as usize] as usize];
-            s = parent[s as usize];
-        }
-        s
-    }
     let emitter = |s: u32| mesh.material_of(s).is_emitter();
     let corners = weld(mesh.triangles.iter().map(|t| &t.v));
     let mut edges: std::collections::HashMap<(u32, u32), u32, FxBuild> = Default::default();
@@ -146,10 +139,7 @@ fn connected_parts(mesh: &Mesh) -> Vec<Vec<u32>> {
         for k in 0..3 {
             let edge = (c[k].min(c[(k + 1) % 3]), c[k].max(c[(k + 1) % 3]));
             let other = *edges.entry(edge).or_insert(t.surface);
-            let (a, b) = (root(&mut parent, other), root(&mut parent, t.surface));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
+            join(&mut parent, other, t.surface);
         }
     }
     let mut parts: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();

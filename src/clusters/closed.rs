@@ -9,8 +9,9 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
+use super::{join, root};
 use crate::scene::Aabb;
-use crate::scene::surfaces::FxBuild;
+use crate::scene::surfaces::{FxBuild, weld};
 
 /// One part as the test reads it: its triangles (counter-clockwise seen from their front), and whether any
 /// of its surfaces is cut out (a hole shows its back faces).
@@ -36,7 +37,7 @@ pub fn hiding_boxes(parts: &[PartShape]) -> Vec<Option<Aabb>> {
             if parts[i].cut {
                 return None;
             }
-            let cappers = caps(&parts[i].triangles, &edges[i], |q| closed[q], parts, &boxes)?;
+            let cappers = caps(boxes[i], &edges[i], |q| closed[q], parts, &boxes)?;
             Some(cappers.into_iter().fold(boxes[i], |b, q| b.union(boxes[q])))
         })
         .collect()
@@ -54,17 +55,14 @@ struct Edges {
 
 impl Edges {
     fn of(triangles: &[[Vec3; 3]]) -> Self {
-        let mut ids: HashMap<[u32; 3], u32, FxBuild> = HashMap::default();
-        let mut positions = Vec::new();
+        let corners = weld(triangles.iter());
+        let mut positions = vec![Vec3::ZERO; corners.iter().max().map_or(0, |&m| m as usize + 1)];
+        for (&id, &p) in corners.iter().zip(triangles.iter().flatten()) {
+            positions[id as usize] = p;
+        }
         let mut uses: HashMap<(u32, u32), (u32, u32), FxBuild> = HashMap::default();
         let mut volume = 0.0f64;
-        for t in triangles {
-            let c = t.map(|p| {
-                *ids.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
-                    positions.push(p);
-                    positions.len() as u32 - 1
-                })
-            });
+        for (t, c) in triangles.iter().zip(corners.chunks_exact(3)) {
             if c[0] == c[1] || c[1] == c[2] || c[2] == c[0] {
                 continue;
             }
@@ -100,13 +98,13 @@ impl Edges {
     }
 }
 
-/// The closed parts whose faces cap every rim of an open part (`triangles`, its `edges`), or `None`. A rim
+/// The closed parts whose faces cap every rim of an open part (its box `bounds`, its `edges`), or `None`. A rim
 /// (a loop of edges used once) is capped where it lies in a plane, the part closed by a flat cap on each
 /// rim faces outwards, and the faces of one closed part in that plane facing the other way (into the
 /// capped part: the closed part lies beyond the cap) form a convex polygon holding the whole rim: then a
 /// ray from outside into the part's inside crosses the part or enters the closed part first.
 fn caps(
-    triangles: &[[Vec3; 3]],
+    bounds: Aabb,
     edges: &Edges,
     closed: impl Fn(usize) -> bool,
     parts: &[PartShape],
@@ -116,24 +114,13 @@ fn caps(
     if rims.is_empty() {
         return None;
     }
-    let scale = Aabb::of(triangles.iter().flatten().copied()).diagonal().max(f32::MIN_POSITIVE) as f64;
+    let scale = bounds.diagonal().max(f32::MIN_POSITIVE) as f64;
     let eps = 1e-5 * scale;
     let p = |v: u32| edges.positions[v as usize].as_dvec3();
     // The rims' loops: their edges grouped by shared corners.
-    let mut parent: HashMap<u32, u32, FxBuild> = HashMap::default();
-    fn root(parent: &mut HashMap<u32, u32, FxBuild>, v: u32) -> u32 {
-        let mut r = v;
-        while let Some(&up) = parent.get(&r).filter(|&&up| up != r) {
-            r = up;
-        }
-        parent.insert(v, r);
-        r
-    }
+    let mut parent: Vec<u32> = (0..edges.positions.len() as u32).collect();
     for &(a, b) in &rims {
-        parent.entry(a).or_insert(a);
-        parent.entry(b).or_insert(b);
-        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-        parent.insert(ra.max(rb), ra.min(rb));
+        join(&mut parent, a, b);
     }
     let mut loops: HashMap<u32, Vec<(u32, u32)>, FxBuild> = HashMap::default();
     for &(a, b) in &rims {

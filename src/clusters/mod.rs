@@ -133,6 +133,24 @@ impl ClusterMesh {
     }
 }
 
+/// The representative of `s` in the union-find forest `parent` (each set led by its smallest member), the
+/// path halved on the way.
+fn root(parent: &mut [u32], mut s: u32) -> u32 {
+    while parent[s as usize] != s {
+        parent[s as usize] = parent[parent[s as usize] as usize];
+        s = parent[s as usize];
+    }
+    s
+}
+
+/// Joins the sets of `a` and `b` in the forest `parent`, the smaller root leading.
+fn join(parent: &mut [u32], a: u32, b: u32) {
+    let (a, b) = (root(parent, a), root(parent, b));
+    if a != b {
+        parent[a.max(b) as usize] = a.min(b);
+    }
+}
+
 /// The largest `dir · p` over the points of a cluster with this `sphere` and `slab`, at most: `dir` a unit
 /// vector. The points lie in the sphere and within the slab's half thickness of its mid-plane, so along the
 /// axis they reach `|dir · axis| · h` and across it `|dir × axis| · r` beyond the centre.
